@@ -1,0 +1,156 @@
+"""Typed, validated, frozen parameter objects loaded from TOML.
+
+A parameter file is a TOML document whose tables mirror a pydantic model. A leaf is either a
+plain value or an inline table ``{value = ..., source = "..."}``; the source says where the number
+comes from and starts with ``paper 000``, ``paper 001``, ``datasheet`` or ``assumed``. Loading
+rejects a missing key, an unknown key (with a "did you mean" hint), a wrong type or a value out
+of range with one message that names the file and the dotted key.
+"""
+
+from __future__ import annotations
+
+import difflib
+import tomllib
+from collections.abc import Mapping
+from pathlib import Path
+from typing import Any, TypeVar
+
+from pydantic import BaseModel, ConfigDict, PrivateAttr, ValidationError
+
+from anklelab.errors import ParameterError
+
+__all__ = ["SOURCE_KINDS", "Parameters", "load_parameters", "parameters_from_mapping"]
+
+SOURCE_KINDS = ("paper 000", "paper 001", "datasheet", "assumed")
+
+P = TypeVar("P", bound="Parameters")
+
+
+class Parameters(BaseModel):
+    """Base of every parameter section: frozen, strict types, unknown keys rejected."""
+
+    model_config = ConfigDict(frozen=True, strict=True, extra="forbid")
+    _sources: dict[str, str] = PrivateAttr(default_factory=dict)
+
+    @property
+    def sources(self) -> dict[str, str]:
+        """Where each value comes from, by dotted key (only values whose file gave a source)."""
+        return dict(self._sources)
+
+    def replace(self: P, changes: Mapping[str, Any]) -> P:
+        """Return a validated copy with dotted keys changed.
+
+        Parameters
+        ----------
+        changes : mapping
+            ``{"foot.inertia_kgm2": 0.25, ...}``; each key is a dotted path into this object.
+
+        Examples
+        --------
+        >>> from anklelab.platforms import load_platform
+        >>> p = load_platform("capstan")
+        >>> p.replace({"gearhead.ratio": 14.0}).gearhead.ratio
+        14.0
+        """
+        data = self.model_dump()
+        for dotted, value in changes.items():
+            node = data
+            *parents, leaf = dotted.split(".")
+            for key in parents:
+                if not isinstance(node.get(key), dict):
+                    raise ParameterError(f"{dotted!r}: {key!r} is not a parameter section")
+                node = node[key]
+            if leaf not in node:
+                raise ParameterError(f"{dotted!r}: unknown parameter{_hint(leaf, node)}")
+            node[leaf] = value
+        changed = parameters_from_mapping(type(self), data, origin="replace()")
+        changed._sources = {k: v for k, v in self._sources.items() if k not in changes}
+        return changed
+
+
+def _hint(key: str, options: Mapping[str, Any] | Any) -> str:
+    close = difflib.get_close_matches(key, list(options), n=1)
+    return f" (did you mean {close[0]!r}?)" if close else ""
+
+
+def _split_sources(node: Any, prefix: str, sources: dict[str, str], origin: str) -> Any:
+    """Replace ``{value, source}`` leaves by their value, collecting sources by dotted key.
+
+    TOML arrays become tuples (parameter objects are immutable).
+    """
+    if isinstance(node, list):
+        return tuple(node)
+    if not isinstance(node, dict):
+        return node
+    if "value" in node and set(node) <= {"value", "source"}:
+        source = node.get("source", "")
+        if not isinstance(source, str) or not source.startswith(SOURCE_KINDS):
+            raise ParameterError(
+                f"{origin}: {prefix}: source must start with one of {', '.join(SOURCE_KINDS)}; "
+                f"got {source!r}"
+            )
+        sources[prefix] = source
+        return _split_sources(node["value"], prefix, {}, origin)
+    return {
+        key: _split_sources(value, f"{prefix}.{key}" if prefix else key, sources, origin)
+        for key, value in node.items()
+    }
+
+
+def _model_at(model: type[BaseModel], loc: tuple[Any, ...]) -> type[BaseModel]:
+    for key in loc:
+        field = model.model_fields.get(str(key))
+        annotation = getattr(field, "annotation", None)
+        if not (isinstance(annotation, type) and issubclass(annotation, BaseModel)):
+            break
+        model = annotation
+    return model
+
+
+def _describe(error: Mapping[str, Any], model: type[BaseModel]) -> str:
+    loc = tuple(error["loc"])
+    key = ".".join(str(part) for part in loc)
+    if error["type"] == "missing":
+        return f"{key}: required key is missing"
+    if error["type"] == "extra_forbidden":
+        parent = _model_at(model, loc[:-1])
+        return f"{key}: unknown key{_hint(str(loc[-1]), parent.model_fields)}"
+    return f"{key}: {error['msg']}; got {error.get('input')!r}"
+
+
+def parameters_from_mapping(model: type[P], data: Mapping[str, Any], *, origin: str) -> P:
+    """Validate a nested mapping into ``model``; errors name ``origin`` and the dotted key."""
+    sources: dict[str, str] = {}
+    values = _split_sources(dict(data), "", sources, origin)
+    try:
+        params = model.model_validate(values)
+    except ValidationError as exc:
+        lines = "\n  ".join(_describe(err, model) for err in exc.errors())
+        raise ParameterError(f"{origin}: invalid parameters:\n  {lines}") from None
+    params._sources = sources
+    return params
+
+
+def load_parameters(model: type[P], path: str | Path) -> P:
+    """Load and validate a TOML parameter file.
+
+    Parameters
+    ----------
+    model : type
+        The :class:`Parameters` subclass describing the file.
+    path : str or Path
+        The TOML file.
+
+    Returns
+    -------
+    Parameters
+        A frozen instance; its ``sources`` give where each value comes from.
+    """
+    path = Path(path)
+    try:
+        data = tomllib.loads(path.read_text(encoding="utf-8"))
+    except FileNotFoundError:
+        raise ParameterError(f"{path}: parameter file not found") from None
+    except tomllib.TOMLDecodeError as exc:
+        raise ParameterError(f"{path}: not valid TOML: {exc}") from None
+    return parameters_from_mapping(model, data, origin=str(path))

@@ -1,0 +1,54 @@
+"""The ``anklelab`` command. Each command group lives in its own module under ``commands``."""
+
+from __future__ import annotations
+
+from typing import Annotated
+
+import typer
+
+from anklelab import __version__
+from anklelab.commands import platform
+from anklelab.errors import AnklelabError
+
+app = typer.Typer(
+    help="anklelab: digital twins, control and identification for ankle actuation platforms.",
+    no_args_is_help=True,
+    pretty_exceptions_enable=False,
+    add_completion=False,
+)
+app.add_typer(platform.app, name="platform")
+
+
+def _version(value: bool) -> None:
+    if value:
+        typer.echo(f"anklelab {__version__}")
+        raise typer.Exit()
+
+
+@app.callback()
+def main(
+    version: Annotated[
+        bool, typer.Option("--version", callback=_version, is_eager=True, help="Show the version.")
+    ] = False,
+) -> None:
+    """anklelab: digital twins, control and identification for ankle actuation platforms."""
+
+
+@app.command()
+def demo() -> None:
+    """Run the end-to-end demonstration of both platforms."""
+    typer.echo(
+        "The demo will simulate the Perturberator experiment (calibration, perturbed walking,\n"
+        "bench tests), analyse it and compare with paper 000, then identify and control the\n"
+        "capstan platform and compare with paper 001. Its pieces are being built; for now, see\n"
+        "`anklelab --help` and `anklelab platform show perturberator`."
+    )
+
+
+def run() -> None:
+    """Entry point: turn anklelab's domain errors into a one-line message and exit code 2."""
+    try:
+        app(standalone_mode=False)
+    except AnklelabError as exc:
+        typer.echo(f"error: {exc}", err=True)
+        raise SystemExit(2) from None

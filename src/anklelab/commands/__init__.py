@@ -1,0 +1,1 @@
+"""Sub-command groups of the ``anklelab`` command, one module per group."""

@@ -1,0 +1,157 @@
+"""In-memory session: what one experiment recorded, as DESIGN.md section 4 lays it out.
+
+A :class:`Session` holds the session metadata (``session.toml``), the calibration recordings
+(platform moving, nobody on it), the walking trials with their manifest rows, the bench tests,
+an optional ``truth`` tree (simulated sessions: what the twin used) and provenance. Recordings
+keep every column they were given: required ones are checked, unknown ones are carried along.
+Readers and writers for the CSV session directory and the native HDF5 store live beside this
+module and all produce or consume this one object.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from typing import Any, Literal
+
+import numpy as np
+from numpy.typing import NDArray
+
+from anklelab.forceplate import CHANNELS, PlateGeometry
+
+__all__ = [
+    "BENCH_COLUMNS",
+    "CALIBRATION_COLUMNS",
+    "DIRECTIONS",
+    "SESSION_FORMAT",
+    "WALKING_COLUMNS",
+    "BenchTest",
+    "Recording",
+    "Session",
+    "SessionInfo",
+    "WalkingTrial",
+]
+
+SESSION_FORMAT = "anklelab-session/1"
+CALIBRATION_COLUMNS = ("time_s", "motor_angle", *CHANNELS)
+WALKING_COLUMNS = ("time_s", "motor_angle", "ankle_angle", *CHANNELS)
+BENCH_COLUMNS = ("time_s", "displacement_m", "force_n")
+DIRECTIONS = ("dorsi", "plantar", "none")
+Direction = Literal["dorsi", "plantar", "none"]
+
+
+@dataclass(frozen=True)
+class SessionInfo:
+    """The contents of ``session.toml``.
+
+    Attributes
+    ----------
+    platform : str
+        Name of a parameter set under ``anklelab/platforms``.
+    sample_rate_hz : float
+        Sampling rate of every recording, Hz.
+    subject : str
+        Subject or specimen label.
+    force_plate : PlateGeometry
+        Sensor offsets and mounting of the force plate.
+    ankle_height_m : float
+        Height ``dz`` of the ankle centre above the plate surface, m.
+    heel_to_ankle_m : float
+        Anterior distance from the heel-contact COP to the ankle centre, m.
+    extra : mapping
+        Any other tables or keys of ``session.toml``, kept as read.
+    """
+
+    platform: str
+    sample_rate_hz: float
+    subject: str
+    force_plate: PlateGeometry
+    ankle_height_m: float
+    heel_to_ankle_m: float
+    extra: Mapping[str, Any] = field(default_factory=dict)
+
+
+@dataclass(frozen=True)
+class Recording:
+    """One recorded file: named columns of equal length, ``time_s`` among them.
+
+    Attributes
+    ----------
+    name : str
+        File name inside its session folder (``"trial_0001.csv"``).
+    columns : mapping of str to ndarray
+        Each column as a 1-D float array, in file order; unknown columns are kept.
+    """
+
+    name: str
+    columns: Mapping[str, NDArray[np.float64]]
+
+    def __getitem__(self, column: str) -> NDArray[np.float64]:
+        return self.columns[column]
+
+    @property
+    def time_s(self) -> NDArray[np.float64]:
+        """Sample times, s."""
+        return self.columns["time_s"]
+
+    @property
+    def n_samples(self) -> int:
+        """Number of samples."""
+        return len(self.time_s)
+
+    def stack(self, names: tuple[str, ...] = CHANNELS) -> NDArray[np.float64]:
+        """Columns ``names`` stacked as ``(len(names), n_samples)``."""
+        return np.stack([self.columns[name] for name in names])
+
+
+@dataclass(frozen=True)
+class WalkingTrial:
+    """A walking recording with its row of ``walking/trials.csv``.
+
+    ``delay_ms`` is the intended timing point after heel contact (NaN when unperturbed); the
+    real heel contact and perturbation onset are detected from the data, never taken from here.
+    """
+
+    trial: int
+    recording: Recording
+    perturbed: bool
+    direction: Direction
+    delay_ms: float
+
+
+@dataclass(frozen=True)
+class BenchTest:
+    """A testing-machine recording with its row of ``bench/tests.csv``."""
+
+    test: int
+    recording: Recording
+    distance_m: float
+
+
+@dataclass(frozen=True)
+class Session:
+    """One experiment: metadata, calibration, walking and bench recordings, truth, provenance.
+
+    Attributes
+    ----------
+    info : SessionInfo
+        Session metadata.
+    calibration : tuple of Recording
+        Platform-only trials (nobody on the plate).
+    walking : tuple of WalkingTrial
+        Walking trials in manifest order.
+    bench : tuple of BenchTest
+        Testing-machine tests.
+    truth : mapping or None
+        Simulated sessions only: nested mapping of str to arrays, numbers, strings or mappings
+        (the twin's parameters, true time courses and reference values).
+    provenance : mapping
+        ``anklelab_version``, ``settings``, ``source_sha256`` and the like.
+    """
+
+    info: SessionInfo
+    calibration: tuple[Recording, ...] = ()
+    walking: tuple[WalkingTrial, ...] = ()
+    bench: tuple[BenchTest, ...] = ()
+    truth: Mapping[str, Any] | None = None
+    provenance: Mapping[str, Any] = field(default_factory=dict)

@@ -1,0 +1,39 @@
+"""Domain exceptions. Each subclasses the built-in a caller would naturally catch."""
+
+from __future__ import annotations
+
+__all__ = [
+    "AnklelabError",
+    "EventNotFoundError",
+    "NotFittedError",
+    "ParameterError",
+    "SafetyLimitError",
+    "SessionFormatError",
+]
+
+
+class AnklelabError(Exception):
+    """Base class of every anklelab exception."""
+
+
+class ParameterError(AnklelabError, ValueError):
+    """A parameter file or parameter value is invalid (names the file, key and expectation)."""
+
+
+class SessionFormatError(AnklelabError, ValueError):
+    """A session file or directory does not follow the anklelab session format."""
+
+
+class EventNotFoundError(AnklelabError, KeyError):
+    """An expected event (heel contact, perturbation onset) is absent from a trial."""
+
+    def __str__(self) -> str:  # KeyError quotes its message; keep it readable
+        return str(self.args[0]) if self.args else ""
+
+
+class NotFittedError(AnklelabError, ValueError, AttributeError):
+    """An estimator was used before ``fit``."""
+
+
+class SafetyLimitError(AnklelabError, RuntimeError):
+    """A controller refused a command or tripped because a safety limit was violated."""

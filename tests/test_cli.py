@@ -1,0 +1,54 @@
+"""The anklelab command: version, help, parameter inspection, error exit codes."""
+
+import subprocess
+import sys
+
+from typer.testing import CliRunner
+
+from anklelab import __version__
+from anklelab.cli import app
+
+runner = CliRunner()
+
+
+def test_version():
+    result = runner.invoke(app, ["--version"])
+    assert result.exit_code == 0 and __version__ in result.output
+
+
+def test_help_lists_command_groups():
+    result = runner.invoke(app, ["--help"])
+    assert result.exit_code == 0
+    assert "platform" in result.output and "demo" in result.output
+
+
+def test_platform_show_lists_sources():
+    result = runner.invoke(app, ["platform", "show", "perturberator"])
+    assert result.exit_code == 0
+    assert "transmission.ratio" in result.output and "paper 000" in result.output
+
+
+def test_bad_parameter_file_exits_2_with_message(tmp_path):
+    bad = tmp_path / "capstan.toml"
+    bad.write_text("[motor]\nresistance_ohm = -1\n")
+    proc = subprocess.run(
+        [
+            sys.executable,
+            "-c",
+            "from anklelab.cli import run; run()",
+            "platform",
+            "check",
+            "capstan",
+            str(bad),
+        ],
+        capture_output=True,
+        text=True,
+    )
+    assert proc.returncode == 2
+    assert str(bad) in proc.stderr and "motor.resistance_ohm" in proc.stderr
+
+
+def test_import_does_not_load_matplotlib():
+    code = "import sys, anklelab, anklelab.cli; print('matplotlib' in sys.modules)"
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert out.stdout.strip() == "False"

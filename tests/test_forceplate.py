@@ -1,0 +1,174 @@
+"""Force-plate conventions (DESIGN.md section 3): static loads, round trips, GRF, ankle torque."""
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+from hypothesis.extra.numpy import arrays
+
+from anklelab.errors import EventNotFoundError
+from anklelab.forceplate import (
+    CHANNELS,
+    PlateGeometry,
+    SagittalLoad,
+    ankle_torque,
+    channels_from_load,
+    resultants,
+    sagittal_load,
+)
+
+A, B, AZ0 = 0.12, 0.20, -0.045
+
+
+def plate(anterior_axis="+x"):
+    return PlateGeometry(a_m=A, b_m=B, az0_m=AZ0, anterior_axis=anterior_axis)
+
+
+def channel_vector(**values):
+    return np.array([values.get(name, 0.0) for name in CHANNELS])
+
+
+SENSORS = {1: (A, B), 2: (-A, B), 3: (-A, -B), 4: (A, -B)}
+
+
+@pytest.mark.parametrize("sensor", [1, 2, 3, 4])
+def test_vertical_load_over_each_sensor_puts_cop_on_that_sensor(sensor):
+    res = resultants(channel_vector(**{f"fz{sensor}": 500.0}), plate(), axis=0)
+    assert res.fz == 500.0
+    assert (res.ax, res.ay) == pytest.approx(SENSORS[sensor], abs=1e-12)
+
+
+def test_load_shared_by_two_sensors_sits_between_them():
+    # 300 N on sensor 1 and 100 N on sensor 2: the COP is 3/4 of the way from 2 to 1.
+    res = resultants(channel_vector(fz1=300.0, fz2=100.0), plate(), axis=0)
+    assert (float(res.ax), float(res.ay)) == pytest.approx((0.5 * A, B), abs=1e-12)
+
+
+def test_horizontal_force_shifts_cop_by_the_surface_offset():
+    # A pure vertical load at the centre plus a forward shear Fx, applied at the plate surface
+    # (az0 above the sensors): the sensors see My = az0*Fx, and the COP stays at the centre.
+    fx, fz = 50.0, 600.0
+    d = AZ0 * fx / (4 * A)  # sensors 2 and 3 (rear, -a) carry +d, sensors 1 and 4 carry -d
+    channels = channel_vector(
+        fx12=fx / 2, fx34=fx / 2, fz1=fz / 4 - d, fz2=fz / 4 + d, fz3=fz / 4 + d, fz4=fz / 4 - d
+    )
+    res = resultants(channels, plate(), axis=0)
+    assert float(res.my) == pytest.approx(AZ0 * fx)
+    assert (float(res.ax), float(res.ay)) == pytest.approx((0.0, 0.0), abs=1e-12)
+
+
+def test_free_moment_from_opposite_shears():
+    res = resultants(channel_vector(fx12=-10.0, fx34=10.0), plate(), axis=0)
+    assert float(res.mz) == pytest.approx(2 * B * 10.0)
+    assert float(res.fx) == 0.0
+
+
+@pytest.mark.parametrize(
+    ("axis", "anterior_force", "anterior_cop"),
+    [
+        ("+x", ("fx", 1), ("ax", 1)),
+        ("-x", ("fx", -1), ("ax", -1)),
+        ("+y", ("fy", 1), ("ay", 1)),
+        ("-y", ("fy", -1), ("ay", -1)),
+    ],
+)
+def test_known_static_load_for_every_mounting(axis, anterior_force, anterior_cop):
+    """A 700 N load pushing backwards on the plate 5 cm ahead of the centre, any mounting."""
+    geometry = plate(axis)
+    # Walking-direction unit vector in plate coordinates.
+    direction = {"+x": (1, 0), "-x": (-1, 0), "+y": (0, 1), "-y": (0, -1)}[axis]
+    cop = 0.05 * np.array(direction)
+    # The foot pushes the plate backwards by 40 N and down by 700 N (z down).
+    force = np.array([-40.0 * direction[0], -40.0 * direction[1], 700.0])
+    load = sagittal_load(
+        resultants(channels_from_load(force, cop, geometry, axis=0), geometry, axis=0), axis
+    )
+    # The plate pushes the foot forwards (+40 N anterior) and up (+700 N).
+    assert float(load.grf_z) == pytest.approx(700.0)
+    assert float(load.grf_x) == pytest.approx(40.0)
+    assert float(load.cop_x) == pytest.approx(0.05)
+
+
+loads = st.tuples(
+    st.floats(-300, 300),
+    st.floats(-300, 300),
+    st.floats(20, 2000),
+    st.floats(-0.25, 0.25),
+    st.floats(-0.15, 0.15),
+    st.floats(-20, 20),
+)
+
+
+@settings(max_examples=200, deadline=None)
+@given(load=loads)
+def test_random_loads_round_trip(load):
+    fx, fy, fz, x, y, tz = load
+    g = plate()
+    c = channels_from_load([fx, fy, fz], [x, y], g, free_moment_nm=tz, axis=0)
+    res = resultants(c, g, axis=0)
+    np.testing.assert_allclose([res.fx, res.fy, res.fz], [fx, fy, fz], atol=1e-9)
+    np.testing.assert_allclose([res.ax, res.ay], [x, y], atol=1e-9)
+    np.testing.assert_allclose(res.mz, x * fy - y * fx + tz, atol=1e-8)
+
+
+@settings(max_examples=50, deadline=None)
+@given(channels=arrays(np.float64, (3, 8, 5), elements=st.floats(-1000, 1000)))
+def test_channels_round_trip_through_their_resultants(channels):
+    """Forward then inverse gives the minimum-norm channels with the same resultants."""
+    g = plate()
+    res = resultants(channels, g)
+    force = np.stack([res.fx, res.fy, res.fz], axis=-2)
+    with np.errstate(invalid="ignore"):
+        moments = np.stack([res.mx, res.my, res.mz], axis=-2)
+    again = g.matrix() @ np.moveaxis(channels, -2, -1)[..., None]
+    np.testing.assert_allclose(
+        again[..., 0], np.moveaxis(np.concatenate([force, moments], -2), -2, -1), atol=1e-9
+    )
+
+
+def test_vectorised_over_trials_and_samples():
+    rng = np.random.default_rng(0)
+    g = plate()
+    force = rng.normal(0, 50, (4, 3, 100)) + np.array([0, 0, 800])[:, None]
+    cop = rng.uniform(-0.1, 0.1, (4, 2, 100))
+    res = resultants(channels_from_load(force, cop, g), g)
+    assert res.ax.shape == (4, 100)
+    np.testing.assert_allclose(res.ax, cop[:, 0], atol=1e-9)
+    np.testing.assert_allclose(res.fz, force[:, 2], atol=1e-9)
+
+
+def test_unloaded_plate_has_no_cop():
+    res = resultants(np.zeros(8), plate(), axis=0)
+    assert np.isnan(res.ax) and np.isnan(res.ay)
+
+
+def test_wrong_channel_count_is_rejected():
+    with pytest.raises(ValueError, match="expected 8 channels"):
+        resultants(np.zeros((7, 10)), plate())
+
+
+def test_ankle_torque_zeroes_cop_at_heel_contact():
+    cop = np.array([[0.10, 0.12, 0.15], [0.20, 0.21, 0.30]])
+    load = SagittalLoad(grf_x=np.full((2, 3), 10.0), grf_z=np.full((2, 3), 500.0), cop_x=cop)
+    torque, dx = ankle_torque(load, [0, 1], heel_to_ankle_m=0.04, ankle_height_m=0.08)
+    expected_dx = np.array([[-0.04, -0.02, 0.01], [-0.05, -0.04, 0.05]])
+    np.testing.assert_allclose(dx, expected_dx, atol=1e-12)
+    np.testing.assert_allclose(torque, 500.0 * expected_dx + 10.0 * 0.08)
+
+
+def test_ankle_torque_sign_is_dorsiflexing():
+    # Forefoot loading (COP ahead of the ankle) pushes the toes up: positive torque.
+    load = SagittalLoad(np.zeros(2), np.full(2, 700.0), np.array([0.0, 0.15]))
+    torque, _ = ankle_torque(load, 0, heel_to_ankle_m=0.05, ankle_height_m=0.08)
+    assert torque[1] > 0 > torque[0]
+
+
+def test_ankle_torque_rejects_heel_contact_outside_the_trial():
+    load = SagittalLoad(np.zeros(3), np.ones(3), np.zeros(3))
+    with pytest.raises(EventNotFoundError, match="outside the trial"):
+        ankle_torque(load, 5, heel_to_ankle_m=0.0, ankle_height_m=0.08)
+
+
+def test_plate_geometry_is_validated():
+    with pytest.raises(ValueError, match="az0_m"):
+        PlateGeometry(a_m=0.1, b_m=0.1, az0_m=0.05)

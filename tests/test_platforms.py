@@ -1,0 +1,123 @@
+"""Platform parameter sets: shipped files load, every value has a source, bad files fail clearly."""
+
+from pathlib import Path
+
+import pytest
+
+from anklelab.errors import ParameterError
+from anklelab.platforms import PLATFORMS, SOURCE_KINDS, load_platform, platform_file
+
+
+def leaves(node, prefix=""):
+    for key, value in node.items():
+        dotted = f"{prefix}.{key}" if prefix else key
+        if isinstance(value, dict):
+            yield from leaves(value, dotted)
+        else:
+            yield dotted
+
+
+@pytest.mark.parametrize("name", sorted(PLATFORMS))
+def test_every_shipped_value_names_its_source(name):
+    params = load_platform(name)
+    missing = [key for key in leaves(params.model_dump()) if key not in params.sources]
+    assert missing == []
+    assert all(source.startswith(SOURCE_KINDS) for source in params.sources.values())
+
+
+def test_paper_numbers_are_in_the_parameter_sets():
+    p = load_platform("perturberator")
+    assert p.transmission.ratio == 70.0
+    assert p.transmission.peak_output_torque_nm == 653.0
+    assert p.transmission.series_stiffness_nm_per_rad == pytest.approx(
+        12 * 60 * 180 / 3.141592653589793, rel=1e-6
+    )
+    assert p.walking.timing_points_ms == (100.0, 225.0, 350.0, 475.0)
+    c = load_platform("capstan")
+    assert (c.gearhead.ratio, c.capstan.ratio) == (13.8, 20.0)
+    assert c.friction.coulomb_ccw_nm == 0.038
+    assert c.workspace.angle_limit_rad == pytest.approx(43 * 3.141592653589793 / 180, rel=1e-4)
+
+
+def test_parameters_are_frozen():
+    p = load_platform("capstan")
+    with pytest.raises(ValueError, match="frozen"):
+        p.motor.resistance_ohm = 1.0
+
+
+def broken(tmp_path: Path, name: str, old: str, new: str) -> Path:
+    text = platform_file(name).read_text()
+    assert old in text
+    path = tmp_path / f"{name}.toml"
+    path.write_text(text.replace(old, new, 1))
+    return path
+
+
+@pytest.mark.parametrize(
+    ("old", "new", "message"),
+    [
+        (
+            "resistance_ohm = { value = 0.611",
+            "resistance_ohm = { value = -0.611",
+            r"motor\.resistance_ohm: Input should be greater than 0",
+        ),
+        (
+            "resistance_ohm = { value = 0.611",
+            'resistance_ohm = { value = "0.611"',
+            r"motor\.resistance_ohm: Input should be a valid number",
+        ),
+        (
+            "inductance_h = ",
+            "inductanse_h = ",
+            r"motor\.inductanse_h: unknown key \(did you mean 'inductance_h'\?\)",
+        ),
+        ("inductance_h = ", "# inductance_h = ", r"motor\.inductance_h: required key is missing"),
+        (
+            'source = "paper 001, Table 1: R"',
+            'source = "folklore"',
+            r"motor\.resistance_ohm: source must start",
+        ),
+    ],
+)
+def test_broken_parameter_file_names_file_and_key(tmp_path, old, new, message):
+    path = broken(tmp_path, "capstan", old, new)
+    with pytest.raises(ParameterError, match=message) as info:
+        load_platform("capstan", path)
+    assert str(path) in str(info.value)
+
+
+def test_negative_mass_like_value_in_nested_section(tmp_path):
+    path = broken(tmp_path, "perturberator", "ratio = { value = 70.0", "ratio = { value = -70.0")
+    with pytest.raises(
+        ParameterError, match=r"transmission\.ratio: Input should be greater than 0"
+    ):
+        load_platform("perturberator", path)
+
+
+def test_plain_values_without_sources_are_accepted(tmp_path):
+    path = tmp_path / "capstan.toml"
+    path.write_text(
+        platform_file("capstan")
+        .read_text()
+        .replace(
+            'ratio = { value = 20.0, source = "paper 001, Table 1: r_c = 20:1" }', "ratio = 25.0"
+        )
+    )
+    params = load_platform("capstan", path)
+    assert params.capstan.ratio == 25.0 and "capstan.ratio" not in params.sources
+
+
+def test_unknown_platform_and_missing_file():
+    with pytest.raises(ParameterError, match="unknown platform 'perturbator'"):
+        load_platform("perturbator")
+    with pytest.raises(ParameterError, match="not found"):
+        load_platform("capstan", "/nonexistent/capstan.toml")
+
+
+def test_replace_validates_and_keeps_other_sources():
+    p = load_platform("capstan")
+    q = p.replace({"gearhead.ratio": 14.0})
+    assert q.gearhead.ratio == 14.0 and "gearhead.ratio" not in q.sources
+    assert q.sources["capstan.ratio"] == p.sources["capstan.ratio"]
+    with pytest.raises(ParameterError, match="greater than 0"):
+        p.replace({"gearhead.ratio": 0.0})
