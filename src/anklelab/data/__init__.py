@@ -1,5 +1,15 @@
-"""Sessions: the in-memory model, the CSV session directory and the native HDF5 store."""
+"""Sessions: the in-memory model, the CSV session directory, the native HDF5 store, MATLAB.
 
+::
+
+    from anklelab.data import load_session, save_session
+    session = load_session("my_session_dir")     # or a .h5 / .mat file
+    save_session(session, "my_session.h5")       # atomic; format="dir" writes CSV
+"""
+
+from anklelab.data.directory import read_directory, write_directory
+from anklelab.data.hdf5 import H5_FORMAT, read_hdf5, write_hdf5
+from anklelab.data.matlab import read_matlab
 from anklelab.data.session import (
     BENCH_COLUMNS,
     CALIBRATION_COLUMNS,
@@ -12,11 +22,19 @@ from anklelab.data.session import (
     SessionInfo,
     WalkingTrial,
 )
+from anklelab.data.store import (
+    diff_sessions,
+    load_session,
+    save_session,
+    session_hash,
+    session_kind,
+)
 
 __all__ = [
     "BENCH_COLUMNS",
     "CALIBRATION_COLUMNS",
     "DIRECTIONS",
+    "H5_FORMAT",
     "SESSION_FORMAT",
     "WALKING_COLUMNS",
     "BenchTest",
@@ -24,4 +42,14 @@ __all__ = [
     "Session",
     "SessionInfo",
     "WalkingTrial",
+    "diff_sessions",
+    "load_session",
+    "read_directory",
+    "read_hdf5",
+    "read_matlab",
+    "save_session",
+    "session_hash",
+    "session_kind",
+    "write_directory",
+    "write_hdf5",
 ]

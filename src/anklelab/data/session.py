@@ -110,6 +110,7 @@ class WalkingTrial:
 
     ``delay_ms`` is the intended timing point after heel contact (NaN when unperturbed); the
     real heel contact and perturbation onset are detected from the data, never taken from here.
+    ``extra`` holds any further manifest columns of this row, as the strings read.
     """
 
     trial: int
@@ -117,15 +118,21 @@ class WalkingTrial:
     perturbed: bool
     direction: Direction
     delay_ms: float
+    extra: Mapping[str, str] = field(default_factory=dict)
 
 
 @dataclass(frozen=True)
 class BenchTest:
-    """A testing-machine recording with its row of ``bench/tests.csv``."""
+    """A testing-machine recording with its row of ``bench/tests.csv``.
+
+    ``distance_m`` is the actuator's distance along the foot, m; ``extra`` holds any further
+    manifest columns of this row, as the strings read.
+    """
 
     test: int
     recording: Recording
     distance_m: float
+    extra: Mapping[str, str] = field(default_factory=dict)
 
 
 @dataclass(frozen=True)

@@ -1,0 +1,366 @@
+"""Validation shared by every reader and writer: session metadata, recordings, manifests.
+
+Every check raises :class:`~anklelab.errors.SessionFormatError` with one message that names the
+file (or HDF5 / MATLAB location), the column or key, the row, and what was expected. Row labels
+are supplied by the caller (``"line 17"`` for CSV files, ``"sample 16"`` elsewhere), so the same
+checks serve the CSV directory, the HDF5 store, MATLAB files and sessions built in memory.
+"""
+
+from __future__ import annotations
+
+import difflib
+import math
+from collections.abc import Callable, Iterable, Mapping
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from anklelab._params import parameters_from_mapping
+from anklelab.data._tree import canonical
+from anklelab.data.session import (
+    BENCH_COLUMNS,
+    CALIBRATION_COLUMNS,
+    DIRECTIONS,
+    SESSION_FORMAT,
+    WALKING_COLUMNS,
+    BenchTest,
+    Session,
+    SessionInfo,
+    WalkingTrial,
+)
+from anklelab.errors import ParameterError, SessionFormatError
+from anklelab.forceplate import PlateGeometry
+
+__all__ = [
+    "MAX_STEP_JITTER",
+    "RATE_TOLERANCE",
+    "RowLabel",
+    "check_bench_tests",
+    "check_columns",
+    "check_recording",
+    "check_unique",
+    "check_walking_row",
+    "check_walking_trials",
+    "info_from_mapping",
+    "info_to_mapping",
+    "sample_label",
+    "validate_session",
+]
+
+RowLabel = Callable[[int], str]
+RATE_TOLERANCE = 0.02
+"""Largest relative difference between the median time step and ``1 / sample_rate_hz``."""
+MAX_STEP_JITTER = 0.5
+"""Largest deviation of any single time step from ``1 / sample_rate_hz``, as a fraction of it."""
+
+_GEOMETRY_KEYS = ("ankle_height_m", "heel_to_ankle_m")
+
+
+def sample_label(index: int) -> str:
+    """Row label for array data: ``"sample 1"`` is the first sample (1-based)."""
+    return f"sample {index + 1}"
+
+
+def _hint(key: str, options: Iterable[str]) -> str:
+    close = difflib.get_close_matches(key, list(options), n=1)
+    return f" (did you mean {close[0]!r}?)" if close else ""
+
+
+# --- session.toml -------------------------------------------------------------------------------
+
+
+def _number(data: Mapping[str, Any], key: str, where: str, *, positive: bool) -> float:
+    value = data.get(key)
+    if isinstance(value, bool) or not isinstance(value, int | float) or not math.isfinite(value):
+        raise SessionFormatError(f"{where}{key}: expected a finite number, got {value!r}")
+    if positive and value <= 0:
+        raise SessionFormatError(f"{where}{key}: expected a number > 0, got {value!r}")
+    return float(value)
+
+
+def _table(data: Mapping[str, Any], key: str, origin: str, prefix: str) -> dict[str, Any]:
+    table = data.get(key)
+    if not isinstance(table, Mapping):
+        found = "missing" if table is None else f"got {table!r}"
+        raise SessionFormatError(
+            f"{origin}: {prefix}{key}: expected a table{_hint(key, data) if table is None else ''}"
+            f" ({found})"
+        )
+    return dict(table)
+
+
+def info_from_mapping(data: Mapping[str, Any], origin: str, prefix: str = "") -> SessionInfo:
+    """Validate the contents of ``session.toml`` (or its HDF5 / MATLAB twin) into SessionInfo.
+
+    Parameters
+    ----------
+    data : mapping
+        The parsed document.
+    origin : str
+        File name used in messages.
+    prefix : str
+        Written before each key in messages (``"session."`` for a MATLAB struct).
+
+    Unknown top-level keys and tables, and unknown keys inside ``[force_plate]`` and
+    ``[geometry]``, are kept in :attr:`SessionInfo.extra`.
+    """
+    from anklelab.platforms import PLATFORMS  # platforms layer; imported lazily to stay light
+
+    try:
+        data = canonical(data)
+    except ValueError as exc:
+        raise SessionFormatError(f"{origin}: {prefix}{exc}") from None
+    where = f"{origin}: {prefix}"
+    fmt = data.get("format")
+    if fmt != SESSION_FORMAT:
+        raise SessionFormatError(f"{where}format: expected {SESSION_FORMAT!r}, got {fmt!r}")
+    platform = data.get("platform")
+    if platform not in PLATFORMS:
+        raise SessionFormatError(
+            f"{where}platform: unknown platform {platform!r}; expected one of {sorted(PLATFORMS)}"
+        )
+    fs = _number(data, "sample_rate_hz", where, positive=True)
+    subject = data.get("subject")
+    if not isinstance(subject, str):
+        raise SessionFormatError(f"{where}subject: expected a string, got {subject!r}")
+    plate = _table(data, "force_plate", origin, prefix)
+    known = PlateGeometry.model_fields
+    try:
+        geometry_plate = parameters_from_mapping(
+            PlateGeometry,
+            {k: v for k, v in plate.items() if k in known},
+            origin=f"{origin}: {prefix}force_plate",
+        )
+    except ParameterError as exc:
+        raise SessionFormatError(str(exc)) from None
+    geometry = _table(data, "geometry", origin, prefix)
+    for key in _GEOMETRY_KEYS:
+        if key not in geometry:
+            raise SessionFormatError(
+                f"{where}geometry.{key}: required key is missing{_hint(key, geometry)}"
+            )
+    ankle_height = _number(geometry, "ankle_height_m", f"{where}geometry.", positive=True)
+    heel_to_ankle = _number(geometry, "heel_to_ankle_m", f"{where}geometry.", positive=False)
+    extra = {
+        k: v
+        for k, v in data.items()
+        if k not in ("format", "platform", "sample_rate_hz", "subject", "force_plate", "geometry")
+    }
+    for key, table, names in (
+        ("force_plate", plate, known),
+        ("geometry", geometry, _GEOMETRY_KEYS),
+    ):
+        unknown = {k: v for k, v in table.items() if k not in names}
+        if unknown:
+            extra[key] = unknown
+    return SessionInfo(
+        platform=platform,
+        sample_rate_hz=fs,
+        subject=subject,
+        force_plate=geometry_plate,
+        ankle_height_m=ankle_height,
+        heel_to_ankle_m=heel_to_ankle,
+        extra=extra,
+    )
+
+
+def info_to_mapping(info: SessionInfo) -> dict[str, Any]:
+    """The ``session.toml`` document for ``info`` (inverse of :func:`info_from_mapping`)."""
+    extra = canonical(info.extra)
+    out: dict[str, Any] = {
+        "format": SESSION_FORMAT,
+        "platform": info.platform,
+        "sample_rate_hz": float(info.sample_rate_hz),
+        "subject": info.subject,
+    }
+    out |= {k: v for k, v in extra.items() if k not in ("force_plate", "geometry")}
+    out["force_plate"] = info.force_plate.model_dump() | extra.get("force_plate", {})
+    out["geometry"] = {
+        "ankle_height_m": float(info.ankle_height_m),
+        "heel_to_ankle_m": float(info.heel_to_ankle_m),
+    } | extra.get("geometry", {})
+    return out
+
+
+# --- recordings ---------------------------------------------------------------------------------
+
+
+def check_columns(file: str, names: Iterable[str], required: tuple[str, ...], where: str) -> None:
+    """Reject duplicate column names and missing required columns.
+
+    ``where`` says where the names were found (``"header (line 1)"``, ``"datasets"``, ...).
+    """
+    names = list(names)
+    seen: set[str] = set()
+    for name in names:
+        if name in seen:
+            raise SessionFormatError(f"{file}: column {name!r} appears twice in the {where}")
+        seen.add(name)
+    missing = [name for name in required if name not in seen]
+    if missing:
+        hints = "".join(_hint(m, names) for m in missing)
+        raise SessionFormatError(
+            f"{file}: missing required column(s) {', '.join(map(repr, missing))} in the {where}"
+            f"{hints}; expected columns {', '.join(required)} (found {', '.join(names) or 'none'})"
+        )
+
+
+def check_recording(
+    file: str,
+    columns: Mapping[str, NDArray[np.float64]],
+    required: tuple[str, ...],
+    fs: float,
+    row: RowLabel = sample_label,
+) -> None:
+    """Check one recording: required columns finite, time strictly increasing at ``fs``.
+
+    Parameters
+    ----------
+    file : str
+        File (or location) named in messages.
+    columns : mapping of str to ndarray
+        The recording's columns, equal lengths.
+    required : tuple of str
+        Columns that must be present and finite (unknown columns are not checked).
+    fs : float
+        Sample rate from ``session.toml``, Hz.
+    row : callable
+        Maps a 0-based sample index to the label used in messages.
+    """
+    check_columns(file, columns, required, "columns")
+    lengths = {name: np.shape(values) for name, values in columns.items()}
+    n = lengths["time_s"][0] if len(lengths["time_s"]) == 1 else -1
+    for name, shape in lengths.items():
+        if shape != (n,):
+            raise SessionFormatError(
+                f"{file}: column {name!r} has shape {shape}; expected ({n},) like 'time_s'"
+            )
+    if n < 2:
+        raise SessionFormatError(f"{file}: {n} data row(s); expected at least 2 samples")
+    for name in required:
+        finite = np.isfinite(columns[name])
+        if not finite.all():
+            i = int(np.argmin(finite))
+            raise SessionFormatError(
+                f"{file}: column {name!r}, {row(i)}: value {columns[name][i]!r}; "
+                "expected a finite number"
+            )
+    t = columns["time_s"]
+    step = np.diff(t)
+    if not (step > 0).all():
+        i = int(np.argmin(step > 0)) + 1
+        raise SessionFormatError(
+            f"{file}: column 'time_s', {row(i)}: time {t[i]!r} s does not increase "
+            f"(previous {t[i - 1]!r} s); expected strictly increasing time"
+        )
+    period = 1.0 / fs
+    median = float(np.median(step))
+    if abs(median - period) > RATE_TOLERANCE * period:
+        raise SessionFormatError(
+            f"{file}: column 'time_s': median time step {median:.6g} s ({1 / median:.6g} Hz) "
+            f"does not match session.toml sample_rate_hz = {fs:g} (step {period:.6g} s, "
+            f"tolerance {RATE_TOLERANCE:.0%})"
+        )
+    jitter = np.abs(step - period)
+    if (jitter > MAX_STEP_JITTER * period).any():
+        i = int(np.argmax(jitter > MAX_STEP_JITTER * period)) + 1
+        raise SessionFormatError(
+            f"{file}: column 'time_s', {row(i)}: time step {step[i - 1]:.6g} s; expected "
+            f"{period:.6g} s ± {MAX_STEP_JITTER:.0%} at {fs:g} Hz (dropped or repeated samples?)"
+        )
+
+
+# --- manifests ----------------------------------------------------------------------------------
+
+
+def check_walking_row(where: str, perturbed: bool, direction: str, delay_ms: float) -> None:
+    """Consistency of one manifest row; ``where`` names the file and row."""
+    if direction not in DIRECTIONS:
+        raise SessionFormatError(
+            f"{where}, column 'direction': got {direction!r}; expected one of "
+            f"{', '.join(DIRECTIONS)}"
+        )
+    if perturbed:
+        if direction == "none":
+            raise SessionFormatError(
+                f"{where}, column 'direction': a perturbed trial needs 'dorsi' or 'plantar', "
+                "got 'none'"
+            )
+        if not (math.isfinite(delay_ms) and delay_ms >= 0):
+            raise SessionFormatError(
+                f"{where}, column 'delay_ms': a perturbed trial needs a delay >= 0 ms after heel "
+                f"contact, got {delay_ms!r}"
+            )
+    else:
+        if direction != "none":
+            raise SessionFormatError(
+                f"{where}, column 'direction': an unperturbed trial (perturbed = 0) needs "
+                f"'none', got {direction!r}"
+            )
+        if not math.isnan(delay_ms):
+            raise SessionFormatError(
+                f"{where}, column 'delay_ms': an unperturbed trial (perturbed = 0) needs an "
+                f"empty delay, got {delay_ms!r}"
+            )
+
+
+def check_unique(items: Iterable[tuple[Any, str]], what: str, file: str) -> None:
+    """Reject repeated values; ``items`` yields (value, where-it-is) pairs."""
+    seen: dict[Any, str] = {}
+    for value, where in items:
+        if value in seen:
+            raise SessionFormatError(
+                f"{file}: {where}: duplicate {what} {value!r} (already at {seen[value]}); "
+                f"expected each {what} once"
+            )
+        seen[value] = where
+
+
+def check_walking_trials(file: str, trials: Iterable[tuple[WalkingTrial, str]]) -> None:
+    """Unique trial ids and files across a walking manifest; pairs are (trial, row label)."""
+    trials = list(trials)
+    check_unique(((t.trial, w) for t, w in trials), "trial", file)
+    check_unique(((t.recording.name, w) for t, w in trials), "file", file)
+
+
+def check_bench_tests(file: str, tests: Iterable[tuple[BenchTest, str]]) -> None:
+    """Unique test ids and files and positive distances across a bench manifest."""
+    tests = list(tests)
+    for test, where in tests:
+        if not (math.isfinite(test.distance_m) and test.distance_m > 0):
+            raise SessionFormatError(
+                f"{file}: {where}, column 'distance_m': got {test.distance_m!r}; expected a "
+                "distance > 0 m"
+            )
+    check_unique(((t.test, w) for t, w in tests), "test", file)
+    check_unique(((t.recording.name, w) for t, w in tests), "file", file)
+
+
+# --- whole sessions (before writing) ------------------------------------------------------------
+
+
+def validate_session(session: Session, origin: str = "session") -> None:
+    """Apply every reader check to an in-memory session, so writers never store what readers
+    would reject. Messages name ``origin`` and the recording (``walking[3] 'trial_0004.csv'``)."""
+    info_from_mapping(info_to_mapping(session.info), f"{origin}.info")
+    fs = session.info.sample_rate_hz
+    for i, rec in enumerate(session.calibration):
+        check_recording(
+            f"{origin}.calibration[{i}] {rec.name!r}", rec.columns, CALIBRATION_COLUMNS, fs
+        )
+    labelled = []
+    for i, trial in enumerate(session.walking):
+        where = f"{origin}.walking[{i}] {trial.recording.name!r}"
+        check_walking_row(where, trial.perturbed, trial.direction, trial.delay_ms)
+        check_recording(where, trial.recording.columns, WALKING_COLUMNS, fs)
+        labelled.append((trial, f"walking[{i}]"))
+    check_walking_trials(f"{origin}.walking", labelled)
+    for i, test in enumerate(session.bench):
+        check_recording(
+            f"{origin}.bench[{i}] {test.recording.name!r}",
+            test.recording.columns,
+            BENCH_COLUMNS,
+            fs,
+        )
+    check_bench_tests(f"{origin}.bench", ((t, f"bench[{i}]") for i, t in enumerate(session.bench)))

@@ -1,0 +1,248 @@
+"""The native HDF5 session store (format ``anklelab-h5/1``): reader and atomic writer.
+
+The file mirrors the session directory::
+
+    /                       attribute format = "anklelab-h5/1"
+    /session                the session.toml document (keys as attributes, tables as groups)
+    /calibration/<file>     one group per recording, one float64 dataset per column
+    /walking/<file>         same, with attributes trial, perturbed, direction, delay_ms and any
+                            further manifest columns (strings)
+    /bench/<file>           same, with attributes test, distance_m and further manifest columns
+    /truth                  optional ground-truth tree (groups, datasets, attributes)
+    /provenance             provenance tree
+
+Groups remember creation order (recordings and columns come back in the order written); names
+that contain ``/`` or ``%`` are percent-escaped. No timestamps are stored and keys of trees are
+written sorted, so saving the same session twice gives byte-identical files. Writing goes to a
+temporary file beside the target, renamed into place when complete.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+import h5py
+import numpy as np
+
+from anklelab.data._atomic import atomic_file
+from anklelab.data._checks import (
+    check_bench_tests,
+    check_recording,
+    check_walking_row,
+    check_walking_trials,
+    info_from_mapping,
+    info_to_mapping,
+    validate_session,
+)
+from anklelab.data._tree import (
+    create_group,
+    link_name,
+    read_h5_tree,
+    unlink_name,
+    write_h5_tree,
+)
+from anklelab.data.session import (
+    BENCH_COLUMNS,
+    CALIBRATION_COLUMNS,
+    WALKING_COLUMNS,
+    BenchTest,
+    Recording,
+    Session,
+    WalkingTrial,
+)
+from anklelab.errors import SessionFormatError
+
+__all__ = ["H5_FORMAT", "is_hdf5", "read_hdf5", "write_hdf5"]
+
+H5_FORMAT = "anklelab-h5/1"
+_WALKING_ATTRS = ("trial", "perturbed", "direction", "delay_ms")
+_BENCH_ATTRS = ("test", "distance_m")
+
+
+def is_hdf5(path: str | Path) -> bool:
+    """Whether ``path`` is an HDF5 file (by its signature, wherever the user block ends)."""
+    return Path(path).is_file() and h5py.is_hdf5(str(path))
+
+
+# --- writing ------------------------------------------------------------------------------------
+
+
+def _write_recording(parent: h5py.Group, recording: Recording, attrs: dict[str, Any]) -> None:
+    group = create_group(parent, recording.name)
+    for key, value in attrs.items():
+        group.attrs[key] = value
+    for name, values in recording.columns.items():
+        data = np.asarray(values, dtype=np.float64)
+        group.create_dataset(link_name(name), data=data, track_times=False)
+
+
+def write_hdf5(session: Session, path: str | Path, *, overwrite: bool = True) -> Path:
+    """Write ``session`` to a native HDF5 file, atomically and deterministically.
+
+    Parameters
+    ----------
+    session : Session
+        Validated first with the readers' checks.
+    path : str or Path
+        Target file (``.h5``).
+    overwrite : bool
+        Replace an existing file; otherwise raise ``FileExistsError``.
+
+    Returns
+    -------
+    Path
+        ``path``.
+    """
+    validate_session(session)
+    target = Path(path)
+    with (
+        atomic_file(target, overwrite=overwrite) as tmp,
+        h5py.File(tmp, "w", track_order=True) as f,
+    ):
+        f.attrs["format"] = H5_FORMAT
+        write_h5_tree(create_group(f, "session"), info_to_mapping(session.info))
+        group = create_group(f, "calibration")
+        for recording in session.calibration:
+            _write_recording(group, recording, {})
+        group = create_group(f, "walking")
+        for t in session.walking:
+            known = {
+                "trial": np.int64(t.trial),
+                "perturbed": np.bool_(t.perturbed),
+                "direction": t.direction,
+                "delay_ms": np.float64(t.delay_ms),
+            }
+            _write_recording(group, t.recording, dict(t.extra) | known)
+        group = create_group(f, "bench")
+        for b in session.bench:
+            known = {"test": np.int64(b.test), "distance_m": np.float64(b.distance_m)}
+            _write_recording(group, b.recording, dict(b.extra) | known)
+        if session.truth is not None:
+            write_h5_tree(create_group(f, "truth"), session.truth)
+        write_h5_tree(create_group(f, "provenance"), session.provenance)
+    return target
+
+
+# --- reading ------------------------------------------------------------------------------------
+
+
+def _columns(where: str, group: h5py.Group) -> dict[str, np.ndarray]:
+    columns = {}
+    for link, item in group.items():
+        if not (isinstance(item, h5py.Dataset) and item.ndim == 1 and item.dtype.kind in "fiu"):
+            raise SessionFormatError(
+                f"{where}/{link}: expected a 1-D numeric dataset (one column), got {item!r}"
+            )
+        columns[unlink_name(link)] = np.asarray(item[()], dtype=np.float64)
+    return columns
+
+
+def _attr(where: str, group: h5py.Group, key: str, kind: type) -> Any:
+    if key not in group.attrs:
+        raise SessionFormatError(f"{where}: attribute {key!r} is missing")
+    value = group.attrs[key]
+    ok = {
+        int: isinstance(value, np.integer),
+        bool: isinstance(value, np.bool_ | bool),
+        str: isinstance(value, str),
+        float: isinstance(value, np.floating | float),
+    }[kind]
+    if not ok:
+        raise SessionFormatError(
+            f"{where}: attribute {key!r} = {value!r}; expected a {kind.__name__}"
+        )
+    return kind(value)
+
+
+def _extra(group: h5py.Group, known: tuple[str, ...]) -> dict[str, str]:
+    return {k: str(v) for k, v in group.attrs.items() if k not in known}
+
+
+def _section(f: h5py.File, name: str) -> h5py.Group | None:
+    item = f.get(name)
+    if item is not None and not isinstance(item, h5py.Group):
+        raise SessionFormatError(f"{f.filename}:/{name}: expected a group")
+    return item
+
+
+def read_hdf5(path: str | Path) -> Session:
+    """Read and validate a native HDF5 session file.
+
+    Raises
+    ------
+    SessionFormatError
+        Not an anklelab HDF5 file, an unsupported format version, or any problem the
+        directory reader would reject (naming the HDF5 path, column and 1-based sample).
+    """
+    path = Path(path)
+    try:
+        f = h5py.File(path, "r")
+    except OSError as exc:
+        raise SessionFormatError(f"{path}: cannot open as HDF5 ({exc})") from None
+    with f:
+        fmt = f.attrs.get("format")
+        if isinstance(fmt, bytes):
+            fmt = fmt.decode("utf-8", "replace")
+        if fmt != H5_FORMAT:
+            known = isinstance(fmt, str) and fmt.startswith("anklelab-h5/")
+            raise SessionFormatError(
+                f"{path}: attribute 'format' = {fmt!r}; expected {H5_FORMAT!r}"
+                + (
+                    " (written by a different anklelab version)"
+                    if known
+                    else " (not an anklelab session file)"
+                )
+            )
+        if not isinstance(f.get("session"), h5py.Group):
+            raise SessionFormatError(f"{path}:/session: group is missing")
+        info = info_from_mapping(read_h5_tree(f["session"]), str(path), "/session/")
+        fs = info.sample_rate_hz
+
+        def recording(section: str, link: str, group: h5py.Group, required: tuple[str, ...]):
+            where = f"{path}:/{section}/{link}"
+            columns = _columns(where, group)
+            check_recording(where, columns, required, fs)
+            return where, Recording(unlink_name(link), columns)
+
+        calibration = []
+        if (section := _section(f, "calibration")) is not None:
+            for link, group in section.items():
+                calibration.append(recording("calibration", link, group, CALIBRATION_COLUMNS)[1])
+        walking = []
+        if (section := _section(f, "walking")) is not None:
+            for link, group in section.items():
+                where, rec = recording("walking", link, group, WALKING_COLUMNS)
+                trial = WalkingTrial(
+                    trial=_attr(where, group, "trial", int),
+                    recording=rec,
+                    perturbed=_attr(where, group, "perturbed", bool),
+                    direction=_attr(where, group, "direction", str),  # type: ignore[arg-type]
+                    delay_ms=_attr(where, group, "delay_ms", float),
+                    extra=_extra(group, _WALKING_ATTRS),
+                )
+                check_walking_row(where, trial.perturbed, trial.direction, trial.delay_ms)
+                walking.append((trial, where))
+            check_walking_trials(f"{path}:/walking", walking)
+        bench = []
+        if (section := _section(f, "bench")) is not None:
+            for link, group in section.items():
+                where, rec = recording("bench", link, group, BENCH_COLUMNS)
+                test = BenchTest(
+                    test=_attr(where, group, "test", int),
+                    recording=rec,
+                    distance_m=_attr(where, group, "distance_m", float),
+                    extra=_extra(group, _BENCH_ATTRS),
+                )
+                bench.append((test, where))
+            check_bench_tests(f"{path}:/bench", bench)
+        truth = read_h5_tree(f["truth"]) if "truth" in f else None
+        provenance = read_h5_tree(f["provenance"]) if "provenance" in f else {}
+    return Session(
+        info=info,
+        calibration=tuple(calibration),
+        walking=tuple(t for t, _ in walking),
+        bench=tuple(b for b, _ in bench),
+        truth=truth,
+        provenance=provenance,
+    )

@@ -1,0 +1,277 @@
+"""MATLAB importer: a ``.mat`` file holding one struct ``session`` (v5/v7 or v7.3).
+
+The layout is the session directory's, as MATLAB structs (field names are the column and
+manifest names; vectors may be rows or columns)::
+
+    session                  scalar struct
+      .format                'anklelab-session/1'
+      .platform              'perturberator'
+      .sample_rate_hz        1000
+      .subject               'S01'
+      .force_plate           struct: a_m, b_m, az0_m, anterior_axis ('+x' ...)
+      .geometry              struct: ankle_height_m, heel_to_ankle_m
+      .calibration           1xN struct array: time_s, motor_angle, fx12 ... fz4 [, file]
+      .walking               1xN struct array: trial, perturbed (0/1 or logical),
+                             direction ('dorsi'|'plantar'|'none'), delay_ms (NaN or [] when
+                             unperturbed), time_s, motor_angle, ankle_angle, fx12 ... fz4 [, file]
+      .bench                 1xN struct array: test, distance_m, time_s, displacement_m,
+                             force_n [, file]
+      (any other field)      kept in SessionInfo.extra
+
+In MATLAB::
+
+    session.walking(1) = struct('trial', 1, 'perturbed', 1, 'direction', 'dorsi', ...
+        'delay_ms', 225, 'time_s', t, 'motor_angle', m, 'ankle_angle', a, 'fx12', fx12, ...);
+    save('session.mat', 'session')            % or save(..., '-v7.3')
+
+``file`` names the recording (defaults: ``calibration_001.csv``, ``trial_0001.csv`` from the trial
+id, ``test_001.csv``). In a recording struct every numeric vector as long as ``time_s`` is a
+column (unknown ones are kept); other unknown scalar or text fields of walking and bench
+elements are kept as manifest extras. Files up to v7 are read with :func:`scipy.io.loadmat`,
+v7.3 files (HDF5) with h5py. Errors name the MATLAB field, e.g. ``session.walking(3).fz1``.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+import h5py
+import numpy as np
+import scipy.io
+
+from anklelab.data._checks import (
+    check_bench_tests,
+    check_recording,
+    check_walking_row,
+    check_walking_trials,
+    info_from_mapping,
+)
+from anklelab.data.session import (
+    BENCH_COLUMNS,
+    CALIBRATION_COLUMNS,
+    WALKING_COLUMNS,
+    BenchTest,
+    Recording,
+    Session,
+    WalkingTrial,
+)
+from anklelab.errors import SessionFormatError
+
+__all__ = ["read_matlab"]
+
+_SECTIONS = ("calibration", "walking", "bench")
+
+
+# --- reading the file into plain Python values ----------------------------------------------------
+
+
+def _decode(value: Any) -> str:
+    return value.decode("ascii", "replace") if isinstance(value, bytes) else str(value)
+
+
+def _h5_value(item: h5py.Group | h5py.Dataset, f: h5py.File) -> Any:
+    """A MATLAB v7.3 object as the value :func:`scipy.io.loadmat` would give (simplify_cells)."""
+    cls = _decode(item.attrs.get("MATLAB_class", b""))
+    if isinstance(item, h5py.Group):
+        order = item.attrs.get("MATLAB_fields")
+        names = (
+            [b"".join(np.asarray(field).ravel()).decode("ascii") for field in order]
+            if order is not None
+            else [k for k in item if not k.startswith("#")]
+        )
+        members = {name: item[name] for name in names if name in item}
+        is_array = members and all(
+            isinstance(m, h5py.Dataset)
+            and m.dtype == h5py.ref_dtype
+            and "MATLAB_class" not in m.attrs
+            for m in members.values()
+        )
+        if not is_array:
+            return {name: _h5_value(m, f) for name, m in members.items()}
+        refs = {name: m[()].ravel(order="F") for name, m in members.items()}
+        count = len(next(iter(refs.values())))
+        elements = [{name: _h5_value(f[r[i]], f) for name, r in refs.items()} for i in range(count)]
+        return elements[0] if count == 1 else elements
+    if item.attrs.get("MATLAB_empty", 0):
+        return "" if cls == "char" else np.empty(0)
+    data = np.asarray(item[()]).T  # HDF5 stores MATLAB arrays transposed
+    if cls == "char":
+        return "".join(map(chr, data.ravel()))
+    if cls == "cell":
+        cells = [_h5_value(f[ref], f) for ref in data.ravel()]
+        return cells[0] if len(cells) == 1 else cells
+    if cls == "logical":
+        data = data.astype(bool)
+    data = np.squeeze(data)
+    return data.item() if data.ndim == 0 else data
+
+
+def _load(path: Path) -> dict[str, Any]:
+    """The top-level variables of a MAT file as plain values."""
+    if h5py.is_hdf5(str(path)):
+        with h5py.File(path, "r") as f:
+            return {k: _h5_value(f[k], f) for k in f if not k.startswith("#")}
+    try:
+        return scipy.io.loadmat(str(path), simplify_cells=True)
+    except (ValueError, TypeError, OSError, NotImplementedError) as exc:
+        raise SessionFormatError(f"{path}: cannot read as a MAT file ({exc})") from None
+
+
+# --- building the session -----------------------------------------------------------------------
+
+
+def _elements(value: Any, where: str) -> list[dict[str, Any]]:
+    if isinstance(value, dict):
+        return [value]
+    if isinstance(value, list) and all(isinstance(v, dict) for v in value):
+        return value
+    if isinstance(value, np.ndarray) and value.size == 0:
+        return []
+    if (
+        isinstance(value, np.ndarray)
+        and value.dtype == object
+        and all(isinstance(v, dict) for v in value.ravel())
+    ):
+        return list(value.ravel())
+    raise SessionFormatError(f"{where}: expected a struct array, got {type(value).__name__}")
+
+
+def _scalar(value: Any, where: str, kind: Callable[[Any], Any], expected: str) -> Any:
+    array = np.asarray(value)
+    if array.size == 1 and array.dtype.kind in "biuf":
+        number = array.item()
+        try:
+            return kind(number)
+        except ValueError:
+            pass
+    raise SessionFormatError(f"{where}: expected {expected}, got {value!r}")
+
+
+def _integer(number: float) -> int:
+    if not float(number).is_integer():
+        raise ValueError
+    return int(number)
+
+
+def _flag(number: float) -> bool:
+    if number not in (0, 1):
+        raise ValueError
+    return bool(number)
+
+
+def _delay(value: Any, where: str) -> float:
+    if isinstance(value, np.ndarray) and value.size == 0:
+        return math.nan
+    return _scalar(value, where, float, "a number in ms (NaN or [] if unperturbed)")
+
+
+def _text(value: Any, where: str) -> str:
+    if not isinstance(value, str):
+        raise SessionFormatError(f"{where}: expected text (a char array), got {value!r}")
+    return value
+
+
+def _split(
+    element: dict[str, Any], where: str, required: tuple[str, ...], meta: tuple[str, ...], fs: float
+) -> tuple[Recording | None, dict[str, Any], dict[str, str]]:
+    """Columns, known manifest fields and extra manifest fields of one struct element."""
+    time = np.asarray(element.get("time_s", np.empty(0)))
+    n = time.size
+    columns, known, extra = {}, {}, {}
+    for key, value in element.items():
+        array = np.asarray(value)
+        if key in meta or key == "file":
+            known[key] = value
+        elif (
+            array.dtype.kind in "biuf"
+            and array.ndim >= 1
+            and array.size == n
+            and (array.size == max(array.shape))
+        ):
+            columns[key] = array.ravel().astype(np.float64)
+        elif key in required:
+            raise SessionFormatError(
+                f"{where}.{key}: expected a numeric vector as long as time_s ({n} samples), "
+                f"got {type(value).__name__} of shape {array.shape}"
+            )
+        elif isinstance(value, str) or array.size == 1:
+            extra[key] = str(value)
+    for key in meta:
+        if key not in known:
+            raise SessionFormatError(f"{where}.{key}: field is missing")
+    check_recording(where, columns, required, fs)
+    return Recording("", columns), known, extra
+
+
+def _name(known: dict[str, Any], where: str, default: str) -> str:
+    return _text(known["file"], f"{where}.file") if "file" in known else default
+
+
+def read_matlab(path: str | Path) -> Session:
+    """Read a session from a MATLAB ``.mat`` file (layout in the module docstring).
+
+    Raises
+    ------
+    SessionFormatError
+        Naming the file and the MATLAB field (``session.walking(3).delay_ms``).
+    """
+    path = Path(path)
+    if not path.is_file():
+        raise SessionFormatError(f"{path}: file not found")
+    variables = _load(path)
+    if "session" not in variables:
+        found = ", ".join(k for k in variables if not k.startswith("__")) or "none"
+        raise SessionFormatError(f"{path}: no variable 'session' (found: {found})")
+    root = variables["session"]
+    if not isinstance(root, dict):
+        raise SessionFormatError(f"{path}: session: expected a scalar struct")
+    meta = {k: v for k, v in root.items() if k not in _SECTIONS}
+    info = info_from_mapping(meta, str(path), "session.")
+    fs = info.sample_rate_hz
+
+    def elements(section: str) -> list[tuple[str, dict[str, Any]]]:
+        items = _elements(root.get(section, np.empty(0)), f"{path}: session.{section}")
+        return [(f"{path}: session.{section}({i + 1})", e) for i, e in enumerate(items)]
+
+    calibration = []
+    for i, (where, element) in enumerate(elements("calibration")):
+        rec, known, _ = _split(element, where, CALIBRATION_COLUMNS, (), fs)
+        name = _name(known, where, f"calibration_{i + 1:03d}.csv")
+        calibration.append(Recording(name, rec.columns))
+    walking = []
+    for where, element in elements("walking"):
+        fields = ("trial", "perturbed", "direction", "delay_ms")
+        rec, known, extra = _split(element, where, WALKING_COLUMNS, fields, fs)
+        trial_id = _scalar(known["trial"], f"{where}.trial", _integer, "an integer")
+        trial = WalkingTrial(
+            trial=trial_id,
+            recording=Recording(_name(known, where, f"trial_{trial_id:04d}.csv"), rec.columns),
+            perturbed=_scalar(known["perturbed"], f"{where}.perturbed", _flag, "0 or 1"),
+            direction=_text(known["direction"], f"{where}.direction"),  # type: ignore[arg-type]
+            delay_ms=_delay(known["delay_ms"], f"{where}.delay_ms"),
+            extra=extra,
+        )
+        check_walking_row(where, trial.perturbed, trial.direction, trial.delay_ms)
+        walking.append((trial, where))
+    check_walking_trials(f"{path}: session.walking", walking)
+    bench = []
+    for where, element in elements("bench"):
+        rec, known, extra = _split(element, where, BENCH_COLUMNS, ("test", "distance_m"), fs)
+        test_id = _scalar(known["test"], f"{where}.test", _integer, "an integer")
+        test = BenchTest(
+            test=test_id,
+            recording=Recording(_name(known, where, f"test_{test_id:03d}.csv"), rec.columns),
+            distance_m=_scalar(known["distance_m"], f"{where}.distance_m", float, "a number"),
+            extra=extra,
+        )
+        bench.append((test, where))
+    check_bench_tests(f"{path}: session.bench", bench)
+    return Session(
+        info=info,
+        calibration=tuple(calibration),
+        walking=tuple(t for t, _ in walking),
+        bench=tuple(b for b, _ in bench),
+    )

@@ -1,0 +1,208 @@
+"""Load and save sessions in any supported form; content hashes; session comparison.
+
+``load_session`` accepts a CSV session directory, a native HDF5 file or a MATLAB file and
+detects which; ``save_session`` writes the native HDF5 store or the directory format. Sessions
+read from a directory or MATLAB file are *imports*: their provenance gains ``source_sha256``
+(:func:`session_hash` of the input) and an ``import`` record (anklelab version, importer, source
+name). Native HDF5 files are returned exactly as stored.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import hashlib
+from pathlib import Path
+from typing import Any, Literal
+
+from anklelab._version import __version__
+from anklelab.data._checks import info_to_mapping
+from anklelab.data._tree import canonical, tree_differences
+from anklelab.data.directory import read_directory, write_directory
+from anklelab.data.hdf5 import is_hdf5, read_hdf5, write_hdf5
+from anklelab.data.matlab import read_matlab
+from anklelab.data.session import Recording, Session
+from anklelab.errors import SessionFormatError
+
+__all__ = ["diff_sessions", "load_session", "save_session", "session_hash", "session_kind"]
+
+SessionKind = Literal["dir", "h5", "mat"]
+_CHUNK = 1 << 20
+
+
+def session_kind(path: str | Path) -> SessionKind:
+    """Which reader ``path`` needs: ``"dir"``, ``"h5"`` or ``"mat"``.
+
+    Raises
+    ------
+    SessionFormatError
+        ``path`` does not exist or is none of these.
+    """
+    path = Path(path)
+    if path.is_dir():
+        return "dir"
+    if not path.exists():
+        raise SessionFormatError(f"{path}: no such file or directory")
+    if path.suffix.lower() == ".mat":
+        return "mat"
+    if is_hdf5(path):
+        return "h5"
+    raise SessionFormatError(
+        f"{path}: expected a session directory, an anklelab .h5 file or a MATLAB .mat file"
+    )
+
+
+def _file_digest(path: Path) -> bytes:
+    digest = hashlib.sha256()
+    with path.open("rb") as f:
+        while chunk := f.read(_CHUNK):
+            digest.update(chunk)
+    return digest.digest()
+
+
+def session_hash(path: str | Path) -> str:
+    """SHA-256 (hex) of a session's content, for provenance.
+
+    A file hashes its bytes. A directory hashes, in sorted order, every regular file below it
+    (hidden names starting with ``.`` excluded): its relative POSIX path and the SHA-256 of
+    its bytes, so renaming, adding or changing any file changes the hash.
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> with tempfile.NamedTemporaryFile() as f:
+    ...     session_hash(f.name)[:12]
+    'e3b0c44298fc'
+    """
+    path = Path(path)
+    if path.is_file():
+        return _file_digest(path).hex()
+    if not path.is_dir():
+        raise SessionFormatError(f"{path}: no such file or directory")
+    digest = hashlib.sha256()
+    files = (
+        p
+        for p in path.rglob("*")
+        if p.is_file() and not any(part.startswith(".") for part in p.relative_to(path).parts)
+    )
+    for file in sorted(files, key=lambda p: p.relative_to(path).as_posix()):
+        digest.update(file.relative_to(path).as_posix().encode() + b"\0")
+        digest.update(_file_digest(file))
+    return digest.hexdigest()
+
+
+def load_session(path: str | Path) -> Session:
+    """Read and validate a session: a CSV directory, a native ``.h5`` or a MATLAB ``.mat``.
+
+    Parameters
+    ----------
+    path : str or Path
+        The session. The kind is detected (see :func:`session_kind`).
+
+    Returns
+    -------
+    Session
+        Imports (directory, MATLAB) carry ``provenance["source_sha256"]`` and
+        ``provenance["import"]``; ``provenance["anklelab_version"]`` is set if absent.
+
+    Raises
+    ------
+    SessionFormatError
+        Naming the file, the column and the row of the first problem found.
+    """
+    kind = session_kind(path)
+    if kind == "h5":
+        return read_hdf5(path)
+    session = read_directory(path) if kind == "dir" else read_matlab(path)
+    provenance = dict(session.provenance)
+    provenance.setdefault("anklelab_version", __version__)
+    provenance["source_sha256"] = session_hash(path)
+    provenance["import"] = {
+        "anklelab_version": __version__,
+        "importer": {"dir": "csv-directory", "mat": "matlab"}[kind],
+        "source_name": Path(path).name,
+    }
+    return dataclasses.replace(session, provenance=provenance)
+
+
+def save_session(
+    session: Session,
+    path: str | Path,
+    *,
+    format: Literal["h5", "dir"] = "h5",
+    overwrite: bool = True,
+) -> Path:
+    """Write a session atomically (temporary file or directory beside ``path``, then rename).
+
+    Parameters
+    ----------
+    session : Session
+        Validated first with the readers' checks.
+    path : str or Path
+        Target ``.h5`` file or session directory.
+    format : {"h5", "dir"}
+        Native HDF5 store (deterministic bytes) or the CSV session directory.
+    overwrite : bool
+        Replace an existing target. A directory is only ever replaced if it holds a
+        ``session.toml``.
+
+    Returns
+    -------
+    Path
+        ``path``.
+    """
+    if format == "h5":
+        return write_hdf5(session, path, overwrite=overwrite)
+    if format == "dir":
+        return write_directory(session, path, overwrite=overwrite)
+    raise ValueError(f"format: expected 'h5' or 'dir', got {format!r}")
+
+
+def _recording_tree(recording: Recording, **fields: Any) -> dict[str, Any]:
+    return {"name": recording.name, **fields, "columns": dict(recording.columns)}
+
+
+def _session_tree(session: Session) -> dict[str, Any]:
+    def indexed(items: list[dict[str, Any]]) -> dict[str, Any]:
+        return {f"{i:06d}": item for i, item in enumerate(items)}
+
+    return {
+        "info": info_to_mapping(session.info),
+        "calibration": indexed([_recording_tree(r) for r in session.calibration]),
+        "walking": indexed(
+            [
+                _recording_tree(
+                    t.recording,
+                    trial=t.trial,
+                    perturbed=bool(t.perturbed),
+                    direction=t.direction,
+                    delay_ms=float(t.delay_ms),
+                    extra=dict(t.extra),
+                )
+                for t in session.walking
+            ]
+        ),
+        "bench": indexed(
+            [
+                _recording_tree(
+                    b.recording, test=b.test, distance_m=float(b.distance_m), extra=dict(b.extra)
+                )
+                for b in session.bench
+            ]
+        ),
+        "truth": {} if session.truth is None else session.truth,
+        "has_truth": session.truth is not None,
+        "provenance": session.provenance,
+    }
+
+
+def diff_sessions(a: Session, b: Session, *, provenance: bool = True) -> list[str]:
+    """Every difference between two sessions, as readable lines (empty when equal).
+
+    Arrays must be exactly equal (NaN equal to NaN); recordings are compared in order.
+    ``provenance=False`` ignores the provenance trees.
+    """
+    ta, tb = canonical(_session_tree(a)), canonical(_session_tree(b))
+    if not provenance:
+        ta.pop("provenance")
+        tb.pop("provenance")
+    return tree_differences(ta, tb)

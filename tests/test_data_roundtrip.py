@@ -1,0 +1,106 @@
+"""Session I/O round trips: directory <-> Session <-> HDF5, exact arrays, deterministic bytes."""
+
+import hashlib
+import math
+
+import numpy as np
+import pytest
+
+from anklelab.data import (
+    diff_sessions,
+    load_session,
+    read_directory,
+    read_hdf5,
+    save_session,
+    session_hash,
+)
+from anklelab.data._synthetic import random_session
+
+
+def sha(path):
+    return hashlib.sha256(path.read_bytes()).hexdigest()
+
+
+def test_dir_h5_dir_round_trip_is_exact(tmp_path):
+    original = random_session(seed=3)
+    first = save_session(original, tmp_path / "a", format="dir")
+    from_dir = read_directory(first)
+    assert diff_sessions(original, from_dir) == []
+    h5 = save_session(from_dir, tmp_path / "a.h5")
+    from_h5 = read_hdf5(h5)
+    assert diff_sessions(from_dir, from_h5) == []
+    second = save_session(from_h5, tmp_path / "b", format="dir")
+    files = sorted(p.relative_to(first) for p in first.rglob("*") if p.is_file())
+    assert files == sorted(p.relative_to(second) for p in second.rglob("*") if p.is_file())
+    for name in files:
+        assert (first / name).read_bytes() == (second / name).read_bytes(), name
+
+
+def test_round_trip_keeps_unknown_columns_manifest_extras_and_tables(tmp_path):
+    s = read_directory(save_session(random_session(), tmp_path / "s", format="dir"))
+    assert "emg" in s.walking[0].recording.columns
+    assert s.walking[1].extra == {"note": "step 1"}
+    assert s.info.extra["notes"] == {"operator": "synthetic"}
+    assert math.isnan(s.walking[0].delay_ms) and s.walking[1].delay_ms == 100.0
+
+
+def test_floats_survive_text_round_trip_bit_for_bit(tmp_path):
+    s = random_session(n_walking=1, n_calibration=0, n_bench=0)
+    tricky = np.array([0.1, 1 / 3, 5e-324, 1.7976931348623157e308, -0.0] + [0.0] * 45)
+    rec = s.walking[0].recording
+    columns = dict(rec.columns) | {"ankle_angle": tricky}
+    from dataclasses import replace
+
+    s = replace(s, walking=(replace(s.walking[0], recording=replace(rec, columns=columns)),))
+    back = read_directory(save_session(s, tmp_path / "s", format="dir"))
+    got = back.walking[0].recording["ankle_angle"]
+    assert got.tobytes() == tricky.tobytes()
+
+
+def test_two_saves_of_one_session_are_byte_identical(tmp_path):
+    s = random_session(seed=5)
+    a = save_session(s, tmp_path / "a.h5")
+    b = save_session(s, tmp_path / "b.h5")
+    assert sha(a) == sha(b)
+    # and independent of dict insertion order in the trees
+    flipped = dict(reversed(list(s.truth.items())))
+    from dataclasses import replace
+
+    c = save_session(replace(s, truth=flipped), tmp_path / "c.h5")
+    assert sha(a) == sha(c)
+
+
+def test_load_session_detects_kind_and_records_import_provenance(tmp_path):
+    s = random_session()
+    d = save_session(s, tmp_path / "d", format="dir")
+    h = save_session(s, tmp_path / "s.h5")
+    from_dir = load_session(d)
+    assert from_dir.provenance["source_sha256"] == session_hash(d)
+    assert from_dir.provenance["import"]["importer"] == "csv-directory"
+    assert from_dir.provenance["created_by"] == "random_session"
+    assert diff_sessions(load_session(h), s) == []  # native files come back as stored
+    assert diff_sessions(from_dir, s, provenance=False) == []
+
+
+def test_session_hash_changes_with_any_file(tmp_path):
+    d = save_session(random_session(), tmp_path / "d", format="dir")
+    before = session_hash(d)
+    assert session_hash(d) == before
+    (d / "walking" / "notes.txt").write_text("x")
+    assert session_hash(d) != before
+
+
+def test_truth_none_and_empty_sections_round_trip(tmp_path):
+    s = random_session(n_calibration=0, n_bench=0, truth=False)
+    for fmt in ("h5", "dir"):
+        back = load_session(save_session(s, tmp_path / f"s_{fmt}", format=fmt))
+        assert back.truth is None and back.calibration == () and back.bench == ()
+        assert diff_sessions(back, s, provenance=False) == []
+
+
+def test_save_refuses_to_replace_unrelated_directory(tmp_path):
+    (tmp_path / "precious").mkdir()
+    (tmp_path / "precious" / "thesis.tex").write_text("...")
+    with pytest.raises(FileExistsError, match=r"session\.toml"):
+        save_session(random_session(), tmp_path / "precious", format="dir")
+    assert (tmp_path / "precious" / "thesis.tex").exists()
