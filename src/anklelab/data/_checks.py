@@ -81,12 +81,12 @@ def _number(data: Mapping[str, Any], key: str, where: str, *, positive: bool) ->
 
 def _table(data: Mapping[str, Any], key: str, origin: str, prefix: str) -> dict[str, Any]:
     table = data.get(key)
-    if not isinstance(table, Mapping):
-        found = "missing" if table is None else f"got {table!r}"
+    if table is None:
         raise SessionFormatError(
-            f"{origin}: {prefix}{key}: expected a table{_hint(key, data) if table is None else ''}"
-            f" ({found})"
+            f"{origin}: {prefix}{key}: required table is missing{_hint(key, data)}"
         )
+    if not isinstance(table, Mapping):
+        raise SessionFormatError(f"{origin}: {prefix}{key}: expected a table, got {table!r}")
     return dict(table)
 
 
@@ -243,7 +243,7 @@ def check_recording(
         if not finite.all():
             i = int(np.argmin(finite))
             raise SessionFormatError(
-                f"{file}: column {name!r}, {row(i)}: value {columns[name][i]!r}; "
+                f"{file}: column {name!r}, {row(i)}: value {float(columns[name][i])!r}; "
                 "expected a finite number"
             )
     t = columns["time_s"]
@@ -251,8 +251,8 @@ def check_recording(
     if not (step > 0).all():
         i = int(np.argmin(step > 0)) + 1
         raise SessionFormatError(
-            f"{file}: column 'time_s', {row(i)}: time {t[i]!r} s does not increase "
-            f"(previous {t[i - 1]!r} s); expected strictly increasing time"
+            f"{file}: column 'time_s', {row(i)}: time {float(t[i])!r} s does not increase "
+            f"(previous {float(t[i - 1])!r} s); expected strictly increasing time"
         )
     period = 1.0 / fs
     median = float(np.median(step))

@@ -1,0 +1,419 @@
+"""Every rejected input names the file, the column and the row (DESIGN.md section 4)."""
+
+import shutil
+
+import h5py
+import numpy as np
+import pytest
+
+from anklelab.data import load_session, read_directory, save_session
+from anklelab.data._synthetic import random_session
+from anklelab.errors import SessionFormatError
+
+
+@pytest.fixture(scope="module")
+def base(tmp_path_factory):
+    return save_session(random_session(), tmp_path_factory.mktemp("base") / "s", format="dir")
+
+
+@pytest.fixture
+def session_dir(base, tmp_path):
+    return shutil.copytree(base, tmp_path / "s")
+
+
+def replace(path, old, new):
+    text = path.read_text()
+    assert old in text, (path, old)
+    path.write_text(text.replace(old, new, 1))
+
+
+def set_cell(path, line, column, value):
+    """Overwrite one cell (``line`` is the 1-based CSV line, line 1 the header)."""
+    lines = path.read_text().split("\n")
+    index = lines[0].split(",").index(column)
+    fields = lines[line - 1].split(",")
+    fields[index] = value
+    lines[line - 1] = ",".join(fields)
+    path.write_text("\n".join(lines))
+
+
+def set_times(path, times):
+    lines = path.read_text().split("\n")
+    for k, t in enumerate(times):
+        fields = lines[k + 1].split(",")
+        lines[k + 1] = ",".join([repr(float(t)), *fields[1:]])
+    path.write_text("\n".join(lines))
+
+
+TRIAL = "walking/trial_0002.csv"
+N = 50  # samples per synthetic recording
+
+
+# (case id, mutation of the session directory, regex every part of which must appear)
+CASES = [
+    (
+        "missing column",
+        lambda d: replace(d / TRIAL, "fz3", "fz_3"),
+        r"trial_0002\.csv: missing required column\(s\) 'fz3' in the header \(line 1\)"
+        r".*did you mean 'fz_3'",
+    ),
+    (
+        "duplicate column",
+        lambda d: replace(d / TRIAL, "fz3", "fz2"),
+        r"trial_0002\.csv: column 'fz2' appears twice in the header \(line 1\)",
+    ),
+    (
+        "non-monotonic time",
+        lambda d: set_cell(d / TRIAL, 6, "time_s", "0.002"),
+        r"trial_0002\.csv: column 'time_s', line 6: time 0\.002 s does not increase.*"
+        r"strictly increasing",
+    ),
+    (
+        "NaN",
+        lambda d: set_cell(d / TRIAL, 8, "fz1", "nan"),
+        r"trial_0002\.csv: column 'fz1', line 8: value nan; expected a finite number",
+    ),
+    (
+        "infinity",
+        lambda d: set_cell(d / TRIAL, 9, "motor_angle", "inf"),
+        r"trial_0002\.csv: column 'motor_angle', line 9: value inf",
+    ),
+    (
+        "empty cell",
+        lambda d: set_cell(d / TRIAL, 8, "fy14", ""),
+        r"trial_0002\.csv: column 'fy14', line 8: an empty cell; expected a number",
+    ),
+    (
+        "non-numeric cell",
+        lambda d: set_cell(d / TRIAL, 10, "fx12", "abc"),
+        r"trial_0002\.csv: column 'fx12', line 10: 'abc'; expected a number",
+    ),
+    (
+        "ragged row",
+        lambda d: set_cell(d / TRIAL, 10, "fz4", "1.0,2.0"),
+        r"trial_0002\.csv: line 10 has 12 fields; expected 11 like the header",
+    ),
+    (
+        "wrong sample rate",
+        lambda d: set_times(d / TRIAL, np.arange(N) / 500.0),
+        r"trial_0002\.csv: column 'time_s': median time step 0\.002 s \(500 Hz\) does not match "
+        r"session\.toml sample_rate_hz = 1000",
+    ),
+    (
+        "dropped sample",
+        lambda d: set_times(d / TRIAL, (np.arange(N) + (np.arange(N) >= 20)) / 1e3),
+        r"trial_0002\.csv: column 'time_s', line 22: time step 0\.002 s; expected 0\.001 s",
+    ),
+    (
+        "empty file",
+        lambda d: (d / TRIAL).write_text(""),
+        r"trial_0002\.csv: empty file.*expected a header line naming the columns time_s",
+    ),
+    (
+        "header only",
+        lambda d: (d / TRIAL).write_text((d / TRIAL).read_text().split("\n")[0]),
+        r"trial_0002\.csv: no data rows after the header",
+    ),
+    (
+        "not UTF-8",
+        lambda d: (d / TRIAL).write_bytes(b"time_s,\xe9\n"),
+        r"trial_0002\.csv: not UTF-8 text",
+    ),
+    (
+        "calibration column",
+        lambda d: replace(d / "calibration/cal_02.csv", "motor_angle", "mot"),
+        r"calibration/cal_02\.csv: missing required column\(s\) 'motor_angle' in the header",
+    ),
+    (
+        "bench column",
+        lambda d: replace(d / "bench/bench_01.csv", "force_n", "force"),
+        r"bench/bench_01\.csv: missing required column\(s\) 'force_n'",
+    ),
+    # manifests
+    (
+        "manifest names a missing file",
+        lambda d: (d / "walking/trial_0003.csv").unlink(),
+        r"walking/trials\.csv: line 4, column 'file': .*trial_0003\.csv does not exist",
+    ),
+    (
+        "manifest path escapes folder",
+        lambda d: replace(d / "walking/trials.csv", "trial_0003.csv", "../session.toml"),
+        r"walking/trials\.csv: line 4, column 'file': got '\.\./session\.toml'",
+    ),
+    (
+        "perturbed without direction",
+        lambda d: replace(d / "walking/trials.csv", "1,dorsi,100.0", "1,none,100.0"),
+        r"walking/trials\.csv: line 3, column 'direction': a perturbed trial needs 'dorsi' or "
+        r"'plantar'",
+    ),
+    (
+        "unperturbed with delay",
+        lambda d: replace(d / "walking/trials.csv", "0,none,", "0,none,75"),
+        r"walking/trials\.csv: line 2, column 'delay_ms': an unperturbed trial .* needs an empty",
+    ),
+    (
+        "perturbed without delay",
+        lambda d: replace(d / "walking/trials.csv", "dorsi,100.0", "dorsi,"),
+        r"walking/trials\.csv: line 3, column 'delay_ms': a perturbed trial needs a delay",
+    ),
+    (
+        "unperturbed with direction",
+        lambda d: replace(d / "walking/trials.csv", "0,none", "0,plantar"),
+        r"walking/trials\.csv: line 2, column 'direction': an unperturbed trial .* needs 'none'",
+    ),
+    (
+        "unknown direction",
+        lambda d: replace(d / "walking/trials.csv", "plantar", "sideways"),
+        r"walking/trials\.csv: line 4, column 'direction': got 'sideways'; expected one of dorsi",
+    ),
+    (
+        "perturbed not 0/1",
+        lambda d: replace(d / "walking/trials.csv", ",0,none", ",yes,none"),
+        r"walking/trials\.csv: line 2, column 'perturbed': got 'yes'; expected 0 or 1",
+    ),
+    (
+        "non-integer trial",
+        lambda d: replace(d / "walking/trials.csv", "3,trial_0003", "3.5,trial_0003"),
+        r"walking/trials\.csv: line 4, column 'trial': got '3\.5'; expected an integer",
+    ),
+    (
+        "duplicate trial id",
+        lambda d: replace(d / "walking/trials.csv", "3,trial_0003", "2,trial_0003"),
+        r"walking/trials\.csv: line 4: duplicate trial 2 \(already at line 3\)",
+    ),
+    (
+        "duplicate file",
+        lambda d: replace(d / "walking/trials.csv", "3,trial_0003", "3,trial_0002"),
+        r"walking/trials\.csv: line 4: duplicate file 'trial_0002\.csv' \(already at line 3\)",
+    ),
+    (
+        "manifest column missing",
+        lambda d: replace(d / "walking/trials.csv", "delay_ms", "delay"),
+        r"walking/trials\.csv: missing required column\(s\) 'delay_ms' in the header \(line 1\)",
+    ),
+    (
+        "manifest ragged",
+        lambda d: replace(d / "walking/trials.csv", "step 1", "step 1,x"),
+        r"walking/trials\.csv: line 3 has 7 fields; expected 6",
+    ),
+    (
+        "manifest empty",
+        lambda d: (d / "walking/trials.csv").write_text(
+            "trial,file,perturbed,direction,delay_ms\n"
+        ),
+        r"walking/trials\.csv: no rows after the header",
+    ),
+    (
+        "manifest missing",
+        lambda d: (d / "walking/trials.csv").unlink(),
+        r"walking/trials\.csv: missing; a walking/ folder needs its manifest",
+    ),
+    (
+        "bench distance",
+        lambda d: replace(d / "bench/tests.csv", "0.06", "-0.06"),
+        r"bench/tests\.csv: line 2, column 'distance_m': got -0\.06; expected a distance > 0 m",
+    ),
+    (
+        "bench distance text",
+        lambda d: replace(d / "bench/tests.csv", "0.06", "six cm"),
+        r"bench/tests\.csv: line 2, column 'distance_m': got 'six cm'; expected a number",
+    ),
+    # session.toml
+    ("no session.toml", lambda d: (d / "session.toml").unlink(), r"session\.toml: file not found"),
+    (
+        "format version",
+        lambda d: replace(d / "session.toml", "session/1", "session/9"),
+        r"session\.toml: format: expected 'anklelab-session/1', got 'anklelab-session/9'",
+    ),
+    (
+        "unknown platform",
+        lambda d: replace(d / "session.toml", '"perturberator"', '"perturbator"'),
+        r"session\.toml: platform: unknown platform 'perturbator'; expected one of",
+    ),
+    (
+        "bad sample rate",
+        lambda d: replace(d / "session.toml", "= 1000.0", "= 0.0"),
+        r"session\.toml: sample_rate_hz: expected a number > 0, got 0\.0",
+    ),
+    (
+        "sample rate text",
+        lambda d: replace(d / "session.toml", "= 1000.0", '= "1 kHz"'),
+        r"session\.toml: sample_rate_hz: expected a finite number, got '1 kHz'",
+    ),
+    (
+        "plate key missing",
+        lambda d: replace(d / "session.toml", "a_m = 0.12\n", ""),
+        r"session\.toml: force_plate: invalid parameters:\s+a_m: required key is missing",
+    ),
+    (
+        "plate sign",
+        lambda d: replace(d / "session.toml", "az0_m = -0.045", "az0_m = 0.045"),
+        r"session\.toml: force_plate: invalid parameters:\s+az0_m: .*less than 0",
+    ),
+    (
+        "plate table missing",
+        lambda d: replace(d / "session.toml", "[force_plate]", "[forceplate]"),
+        r"session\.toml: force_plate: required table is missing \(did you mean 'forceplate'\?\)",
+    ),
+    (
+        "geometry key",
+        lambda d: replace(d / "session.toml", "ankle_height_m", "ankle_heigth_m"),
+        r"session\.toml: geometry\.ankle_height_m: required key is missing \(did you mean "
+        r"'ankle_heigth_m'\?\)",
+    ),
+    (
+        "negative ankle height",
+        lambda d: replace(d / "session.toml", "ankle_height_m = 0.08", "ankle_height_m = -0.08"),
+        r"session\.toml: geometry\.ankle_height_m: expected a number > 0",
+    ),
+    (
+        "subject not text",
+        lambda d: replace(d / "session.toml", 'subject = "S01"', "subject = 1"),
+        r"session\.toml: subject: expected a string, got 1",
+    ),
+    (
+        "TOML syntax",
+        lambda d: replace(d / "session.toml", "subject =", "subject =="),
+        r"session\.toml: not valid TOML: .*line 4",
+    ),
+    (
+        "truth JSON syntax",
+        lambda d: replace(d / "truth.json", '"count":3', '"count":3,'),
+        r"truth\.json: line 1, column \d+: .*expected JSON",
+    ),
+]
+
+
+@pytest.mark.parametrize(("mutate", "pattern"), [c[1:] for c in CASES], ids=[c[0] for c in CASES])
+def test_directory_rejections_name_file_column_and_line(session_dir, mutate, pattern):
+    mutate(session_dir)
+    with pytest.raises(SessionFormatError, match=pattern):
+        load_session(session_dir)
+
+
+def test_line_numbers_count_blank_lines(session_dir):
+    path = session_dir / TRIAL
+    lines = path.read_text().split("\n")
+    lines.insert(3, "")  # a blank line 4: data row 8 is now on line 9
+    path.write_text("\n".join(lines))
+    set_cell(path, 9, "fz1", "nan")
+    with pytest.raises(SessionFormatError, match=r"column 'fz1', line 9:"):
+        read_directory(session_dir)
+
+
+def test_tolerated_variations(session_dir):
+    """BOM, CRLF, spaces after commas, quoted numbers, unknown files, integer sample rate."""
+    path = session_dir / TRIAL
+    text = path.read_text().replace(",", ", ").replace("\n", "\r\n")
+    path.write_bytes(b"\xef\xbb\xbf" + text.encode())
+    set_cell(session_dir / "walking/trial_0003.csv", 5, "fz1", '"12.5"')
+    (session_dir / "walking/README.txt").write_text("notes")
+    replace(session_dir / "session.toml", "= 1000.0", "= 1000")
+    s = read_directory(session_dir)
+    assert s.info.sample_rate_hz == 1000.0
+    assert s.walking[2].recording["fz1"][3] == 12.5
+    assert s.walking[1].recording.n_samples == N
+
+
+def test_nan_in_unknown_column_is_kept(session_dir):
+    set_cell(session_dir / "walking/trial_0001.csv", 5, "emg", "nan")
+    s = read_directory(session_dir)
+    assert np.isnan(s.walking[0].recording["emg"][3])
+
+
+def test_unperturbed_delay_written_as_nan_is_accepted(session_dir):
+    replace(session_dir / "walking/trials.csv", "0,none,", "0,none,NaN")
+    assert np.isnan(read_directory(session_dir).walking[0].delay_ms)
+
+
+# --- HDF5 -----------------------------------------------------------------------------------
+
+
+@pytest.fixture
+def h5(tmp_path):
+    return save_session(random_session(), tmp_path / "s.h5")
+
+
+def test_h5_wrong_format_version(h5):
+    with h5py.File(h5, "a") as f:
+        f.attrs["format"] = "anklelab-h5/2"
+    with pytest.raises(
+        SessionFormatError,
+        match=r"s\.h5: attribute 'format' = 'anklelab-h5/2'; "
+        r"expected 'anklelab-h5/1' \(written by a different anklelab version\)",
+    ):
+        load_session(h5)
+
+
+def test_h5_not_an_anklelab_file(tmp_path):
+    path = tmp_path / "other.h5"
+    with h5py.File(path, "w") as f:
+        f["x"] = [1, 2]
+    with pytest.raises(
+        SessionFormatError,
+        match=r"other\.h5: attribute 'format' = None; "
+        r"expected 'anklelab-h5/1' \(not an anklelab session file\)",
+    ):
+        load_session(path)
+
+
+def test_h5_bad_data_names_path_column_and_sample(h5):
+    with h5py.File(h5, "a") as f:
+        f["walking/trial_0003.csv/fz2"][7] = np.nan
+    with pytest.raises(
+        SessionFormatError,
+        match=r"s\.h5:/walking/trial_0003\.csv: column 'fz2', sample 8: value nan",
+    ):
+        load_session(h5)
+
+
+def test_h5_bad_manifest_attribute(h5):
+    with h5py.File(h5, "a") as f:
+        f["walking/trial_0002.csv"].attrs["direction"] = "none"
+    with pytest.raises(
+        SessionFormatError,
+        match=r"s\.h5:/walking/trial_0002\.csv, column "
+        r"'direction': a perturbed trial needs",
+    ):
+        load_session(h5)
+
+
+def test_h5_session_metadata_checked(h5):
+    with h5py.File(h5, "a") as f:
+        f["session"].attrs["platform"] = "nope"
+    with pytest.raises(SessionFormatError, match=r"s\.h5: /session/platform: unknown platform"):
+        load_session(h5)
+
+
+def test_neither_directory_nor_session_file(tmp_path):
+    path = tmp_path / "notes.h5"
+    path.write_text("hello")
+    with pytest.raises(SessionFormatError, match=r"notes\.h5: expected a session directory"):
+        load_session(path)
+    with pytest.raises(SessionFormatError, match=r"missing: no such file"):
+        load_session(tmp_path / "missing")
+
+
+# --- writers validate too -----------------------------------------------------------------------
+
+
+@pytest.mark.parametrize("fmt", ["h5", "dir"])
+def test_writers_refuse_invalid_sessions(tmp_path, fmt):
+    from dataclasses import replace as dc_replace
+
+    s = random_session()
+    rec = s.walking[1].recording
+    bad = dict(rec.columns) | {"fz1": np.where(np.arange(rec.n_samples) == 4, np.nan, 1.0)}
+    s = dc_replace(
+        s,
+        walking=(
+            s.walking[0],
+            dc_replace(s.walking[1], recording=dc_replace(rec, columns=bad)),
+            *s.walking[2:],
+        ),
+    )
+    with pytest.raises(
+        SessionFormatError, match=r"session\.walking\[1\] 'trial_0002\.csv': column 'fz1', sample 5"
+    ):
+        save_session(s, tmp_path / "out", format=fmt)
+    assert list(tmp_path.iterdir()) == []
