@@ -1,0 +1,70 @@
+"""Writes are atomic: a failure mid-write leaves no partial target and no leftovers."""
+
+import pytest
+
+import anklelab.data.directory as directory
+import anklelab.data.hdf5 as hdf5
+from anklelab.data import diff_sessions, load_session, save_session
+from anklelab.data._synthetic import random_session
+
+# the function each writer calls once per recording, to make fail part-way through
+WRITERS = {"dir": (directory, "write_csv_recording"), "h5": (hdf5, "_write_recording")}
+
+
+def fail_on_third_call(monkeypatch, fmt, error=None):
+    module, name = WRITERS[fmt]
+    real = getattr(module, name)
+    calls = []
+
+    def flaky(*args, **kwargs):
+        calls.append(1)
+        if len(calls) == 3:
+            raise error or OSError("disk full")
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr(module, name, flaky)
+    return calls
+
+
+def snapshot(root):
+    paths = [root] if root.is_file() else sorted(p for p in root.rglob("*") if p.is_file())
+    return {str(p): p.read_bytes() for p in paths}
+
+
+@pytest.mark.parametrize("fmt", ["dir", "h5"])
+@pytest.mark.parametrize("error", [OSError("disk full"), KeyboardInterrupt()])
+def test_failed_write_leaves_nothing(tmp_path, monkeypatch, fmt, error):
+    calls = fail_on_third_call(monkeypatch, fmt, error)
+    with pytest.raises(type(error)):
+        save_session(random_session(), tmp_path / "out", format=fmt)
+    assert len(calls) == 3  # it really failed part-way
+    assert list(tmp_path.iterdir()) == []
+
+
+@pytest.mark.parametrize("fmt", ["dir", "h5"])
+def test_failed_overwrite_keeps_previous_version(tmp_path, monkeypatch, fmt):
+    old = random_session(seed=1)
+    target = save_session(old, tmp_path / "out", format=fmt)
+    before = snapshot(target)
+    fail_on_third_call(monkeypatch, fmt)
+    with pytest.raises(OSError, match="disk full"):
+        save_session(random_session(seed=2), target, format=fmt)
+    assert snapshot(target) == before
+    assert [p.name for p in tmp_path.iterdir()] == ["out"]
+    assert diff_sessions(load_session(target), old, provenance=False) == []
+
+
+@pytest.mark.parametrize("fmt", ["dir", "h5"])
+def test_overwrite_replaces_and_cleans_up(tmp_path, fmt):
+    target = save_session(random_session(seed=1), tmp_path / "out", format=fmt)
+    new = random_session(seed=2)
+    save_session(new, target, format=fmt)
+    assert diff_sessions(load_session(target), new, provenance=False) == []
+    assert [p.name for p in tmp_path.iterdir()] == ["out"]
+
+
+@pytest.mark.parametrize("fmt", ["dir", "h5"])
+def test_overwrite_false_refuses(tmp_path, fmt):
+    target = save_session(random_session(), tmp_path / "out", format=fmt)
+    with pytest.raises(FileExistsError, match="already exists"):
+        save_session(random_session(), target, format=fmt, overwrite=False)
