@@ -243,12 +243,12 @@ CASES = [
     (
         "plate key missing",
         lambda d: replace(d / "session.toml", "a_m = 0.12\n", ""),
-        r"session\.toml: force_plate: invalid parameters:\s+a_m: required key is missing",
+        r"session\.toml: force_plate\.a_m: required key is missing",
     ),
     (
         "plate sign",
         lambda d: replace(d / "session.toml", "az0_m = -0.045", "az0_m = 0.045"),
-        r"session\.toml: force_plate: invalid parameters:\s+az0_m: .*less than 0",
+        r"session\.toml: force_plate\.az0_m: .*less than 0; got 0\.045",
     ),
     (
         "plate table missing",

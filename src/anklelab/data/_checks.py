@@ -132,8 +132,11 @@ def info_from_mapping(data: Mapping[str, Any], origin: str, prefix: str = "") ->
             {k: v for k, v in plate.items() if k in known},
             origin=f"{origin}: {prefix}force_plate",
         )
-    except ParameterError as exc:
-        raise SessionFormatError(str(exc)) from None
+    except ParameterError as exc:  # one line per key after a heading; name each key in full
+        details = "; ".join(
+            f"{prefix}force_plate.{line.strip()}" for line in str(exc).split("\n")[1:]
+        )
+        raise SessionFormatError(f"{origin}: {details}") from None
     geometry = _table(data, "geometry", origin, prefix)
     for key in _GEOMETRY_KEYS:
         if key not in geometry:

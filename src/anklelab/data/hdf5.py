@@ -222,8 +222,8 @@ def read_hdf5(path: str | Path) -> Session:
                     extra=_extra(group, _WALKING_ATTRS),
                 )
                 check_walking_row(where, trial.perturbed, trial.direction, trial.delay_ms)
-                walking.append((trial, where))
-            check_walking_trials(f"{path}:/walking", walking)
+                walking.append((trial, f"/walking/{link}"))
+            check_walking_trials(str(path), walking)
         bench = []
         if (section := _section(f, "bench")) is not None:
             for link, group in section.items():
@@ -234,8 +234,8 @@ def read_hdf5(path: str | Path) -> Session:
                     distance_m=_attr(where, group, "distance_m", float),
                     extra=_extra(group, _BENCH_ATTRS),
                 )
-                bench.append((test, where))
-            check_bench_tests(f"{path}:/bench", bench)
+                bench.append((test, f"/bench/{link}"))
+            check_bench_tests(str(path), bench)
         truth = read_h5_tree(f["truth"]) if "truth" in f else None
         provenance = read_h5_tree(f["provenance"]) if "provenance" in f else {}
     return Session(

@@ -116,7 +116,7 @@ def _load(path: Path) -> dict[str, Any]:
             return {k: _h5_value(f[k], f) for k in f if not k.startswith("#")}
     try:
         return scipy.io.loadmat(str(path), simplify_cells=True)
-    except (ValueError, TypeError, OSError, NotImplementedError) as exc:
+    except Exception as exc:  # scipy raises many types for a file that is not a MAT file
         raise SessionFormatError(f"{path}: cannot read as a MAT file ({exc})") from None
 
 
@@ -232,17 +232,19 @@ def read_matlab(path: str | Path) -> Session:
     info = info_from_mapping(meta, str(path), "session.")
     fs = info.sample_rate_hz
 
-    def elements(section: str) -> list[tuple[str, dict[str, Any]]]:
+    def elements(section: str) -> list[tuple[str, str, dict[str, Any]]]:
+        """(location for messages, short label, struct) of each element of a section."""
         items = _elements(root.get(section, np.empty(0)), f"{path}: session.{section}")
-        return [(f"{path}: session.{section}({i + 1})", e) for i, e in enumerate(items)]
+        labels = [f"session.{section}({i + 1})" for i in range(len(items))]
+        return [(f"{path}: {label}", label, e) for label, e in zip(labels, items, strict=True)]
 
     calibration = []
-    for i, (where, element) in enumerate(elements("calibration")):
+    for i, (where, _, element) in enumerate(elements("calibration")):
         rec, known, _ = _split(element, where, CALIBRATION_COLUMNS, (), fs)
         name = _name(known, where, f"calibration_{i + 1:03d}.csv")
         calibration.append(Recording(name, rec.columns))
     walking = []
-    for where, element in elements("walking"):
+    for where, label, element in elements("walking"):
         fields = ("trial", "perturbed", "direction", "delay_ms")
         rec, known, extra = _split(element, where, WALKING_COLUMNS, fields, fs)
         trial_id = _scalar(known["trial"], f"{where}.trial", _integer, "an integer")
@@ -255,10 +257,10 @@ def read_matlab(path: str | Path) -> Session:
             extra=extra,
         )
         check_walking_row(where, trial.perturbed, trial.direction, trial.delay_ms)
-        walking.append((trial, where))
-    check_walking_trials(f"{path}: session.walking", walking)
+        walking.append((trial, label))
+    check_walking_trials(str(path), walking)
     bench = []
-    for where, element in elements("bench"):
+    for where, label, element in elements("bench"):
         rec, known, extra = _split(element, where, BENCH_COLUMNS, ("test", "distance_m"), fs)
         test_id = _scalar(known["test"], f"{where}.test", _integer, "an integer")
         test = BenchTest(
@@ -267,8 +269,8 @@ def read_matlab(path: str | Path) -> Session:
             distance_m=_scalar(known["distance_m"], f"{where}.distance_m", float, "a number"),
             extra=extra,
         )
-        bench.append((test, where))
-    check_bench_tests(f"{path}: session.bench", bench)
+        bench.append((test, label))
+    check_bench_tests(str(path), bench)
     return Session(
         info=info,
         calibration=tuple(calibration),

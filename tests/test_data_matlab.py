@@ -1,0 +1,227 @@
+"""MATLAB import: the documented ``session`` struct, v5/v7 (scipy) and v7.3 (HDF5) files."""
+
+import math
+
+import h5py
+import numpy as np
+import pytest
+import scipy.io
+
+from anklelab.data import diff_sessions, load_session, read_matlab
+from anklelab.data._checks import info_to_mapping
+from anklelab.data._synthetic import random_session
+from anklelab.errors import SessionFormatError
+
+
+def struct_array(elements):
+    """A 1xN MATLAB struct array (all elements share the union of fields; missing ones [])."""
+    names = list(dict.fromkeys(k for e in elements for k in e))
+    array = np.empty((1, len(elements)), dtype=[(n, object) for n in names])
+    for i, e in enumerate(elements):
+        array[0, i] = tuple(e.get(n, np.zeros((0, 0))) for n in names)
+    return array
+
+
+def struct_list(elements):
+    """The same struct array as a list of dicts (for the v7.3 writer below)."""
+    names = list(dict.fromkeys(k for e in elements for k in e))
+    return [{n: e.get(n, np.zeros((0, 0))) for n in names} for e in elements]
+
+
+def as_matlab(session, arrays=struct_array):
+    """The documented ``session`` struct for ``session`` (columns as MATLAB column vectors)."""
+
+    def columns(rec):
+        return {k: np.asarray(v)[:, None] for k, v in rec.columns.items()}
+
+    root = info_to_mapping(session.info)
+    root["calibration"] = arrays([{"file": r.name, **columns(r)} for r in session.calibration])
+    root["walking"] = arrays(
+        [
+            {
+                "trial": float(t.trial),
+                "file": t.recording.name,
+                "perturbed": float(t.perturbed),
+                "direction": t.direction,
+                "delay_ms": t.delay_ms,
+                **t.extra,
+                **columns(t.recording),
+            }
+            for t in session.walking
+        ]
+    )
+    root["bench"] = arrays(
+        [
+            {
+                "test": b.test,
+                "file": b.recording.name,
+                "distance_m": b.distance_m,
+                **columns(b.recording),
+            }
+            for b in session.bench
+        ]
+    )
+    return root
+
+
+def write_mat73(path, variables):
+    """A MAT v7.3 file laid out as MATLAB writes one: a 512-byte user block with the text
+    header, MATLAB_class attributes, arrays transposed, char as uint16, scalar structs as
+    groups, struct arrays as groups of reference datasets into '#refs#'."""
+    with h5py.File(path, "w", userblock_size=512) as f:
+        refs = f.create_group("#refs#")
+        counter = iter(range(10**6))
+
+        def put(parent, name, value):
+            if isinstance(value, dict):
+                group = parent.create_group(name)
+                group.attrs["MATLAB_class"] = np.bytes_("struct")
+                field_names = np.empty(len(value), dtype=object)
+                field_names[:] = [np.array(list(k), dtype="S1") for k in value]
+                group.attrs.create(
+                    "MATLAB_fields", field_names, dtype=h5py.vlen_dtype(np.dtype("S1"))
+                )
+                for key, v in value.items():
+                    put(group, key, v)
+            elif isinstance(value, list):  # struct array
+                group = parent.create_group(name)
+                group.attrs["MATLAB_class"] = np.bytes_("struct")
+                for key in value[0]:
+                    targets = []
+                    for element in value:
+                        ref_name = f"r{next(counter)}"
+                        put(refs, ref_name, element[key])
+                        targets.append(refs[ref_name].ref)
+                    group.create_dataset(key, data=np.array(targets, dtype=h5py.ref_dtype)[:, None])
+            elif isinstance(value, str):
+                ds = parent.create_dataset(name, data=np.array([[ord(c)] for c in value], "u2"))
+                ds.attrs["MATLAB_class"] = np.bytes_("char")
+            else:
+                array = np.atleast_2d(np.asarray(value, dtype=float))
+                if array.size == 0:
+                    ds = parent.create_dataset(name, data=np.array([0, 0], dtype="u8"))
+                    ds.attrs["MATLAB_empty"] = np.uint8(1)
+                else:
+                    ds = parent.create_dataset(name, data=array.T)
+                ds.attrs["MATLAB_class"] = np.bytes_("double")
+
+        for name, value in variables.items():
+            put(f, name, value)
+    header = b"MATLAB 7.3 MAT-file, Platform: GLNXA64, Created on: test HDF5 schema 1.00 ."
+    with open(path, "r+b") as f:
+        f.write(header.ljust(116) + b"\0" * 8 + b"\x00\x02IM")
+
+
+@pytest.fixture
+def session():
+    return random_session(seed=4, truth=False)
+
+
+def test_v5_import_equals_session(tmp_path, session):
+    path = tmp_path / "s.mat"
+    scipy.io.savemat(path, {"session": as_matlab(session)})
+    imported = load_session(path)
+    assert diff_sessions(imported, session, provenance=False) == []
+    assert imported.provenance["import"]["importer"] == "matlab"
+    assert len(imported.provenance["source_sha256"]) == 64
+
+
+def test_v73_import_equals_session(tmp_path, session):
+    path = tmp_path / "s73.mat"
+    write_mat73(path, {"session": as_matlab(session, arrays=struct_list)})
+    assert h5py.is_hdf5(path)
+    assert diff_sessions(read_matlab(path), session, provenance=False) == []
+
+
+def test_defaults_row_vectors_and_empty_delay(tmp_path, session):
+    root = as_matlab(session)
+    for element in root["walking"][0]:
+        element["time_s"] = element["time_s"].T  # row vectors are fine too
+        if element["perturbed"] == 0:
+            element["delay_ms"] = np.zeros((0, 0))  # [] for unperturbed
+    root["calibration"] = struct_array(
+        [
+            {k: v for k, v in zip(root["calibration"].dtype.names, e, strict=True) if k != "file"}
+            for e in root["calibration"][0]
+        ]
+    )
+    scipy.io.savemat(tmp_path / "s.mat", {"session": root})
+    imported = read_matlab(tmp_path / "s.mat")
+    assert [r.name for r in imported.calibration] == ["calibration_001.csv", "calibration_002.csv"]
+    assert math.isnan(imported.walking[0].delay_ms)
+    np.testing.assert_array_equal(
+        imported.walking[0].recording.time_s, session.walking[0].recording.time_s
+    )
+
+
+def mutated(tmp_path, session, change):
+    root = as_matlab(session)
+    change(root)
+    path = tmp_path / "bad.mat"
+    scipy.io.savemat(path, {"session": root})
+    return path
+
+
+def walking_field(i, name, value):
+    def change(root):
+        root["walking"][0, i][name] = value
+
+    return change
+
+
+@pytest.mark.parametrize(
+    ("change", "pattern"),
+    [
+        (lambda r: r.update(platform="nope"), r"bad\.mat: session\.platform: unknown platform"),
+        (
+            lambda r: r["force_plate"].pop("b_m"),
+            r"bad\.mat: session\.force_plate\.b_m: required key is missing",
+        ),
+        (
+            walking_field(1, "fz2", np.full((50, 1), np.nan)),
+            r"bad\.mat: session\.walking\(2\): column 'fz2', sample 1: value nan",
+        ),
+        (
+            walking_field(2, "direction", 3.0),
+            r"bad\.mat: session\.walking\(3\)\.direction: expected text",
+        ),
+        (
+            walking_field(0, "perturbed", 2.0),
+            r"bad\.mat: session\.walking\(1\)\.perturbed: expected 0 or 1, got 2\.0",
+        ),
+        (
+            walking_field(1, "delay_ms", np.nan),
+            r"bad\.mat: session\.walking\(2\), column 'delay_ms': a perturbed trial needs a delay",
+        ),
+        (
+            walking_field(1, "fz3", np.zeros((7, 1))),
+            r"bad\.mat: session\.walking\(2\)\.fz3: expected a numeric vector as long as time_s "
+            r"\(50 samples\)",
+        ),
+        (
+            walking_field(2, "trial", 2.0),
+            r"bad\.mat: session\.walking\(3\): duplicate trial 2 "
+            r"\(already at session\.walking\(2\)\)",
+        ),
+    ],
+)
+def test_errors_name_the_matlab_field(tmp_path, session, change, pattern):
+    with pytest.raises(SessionFormatError, match=pattern):
+        read_matlab(mutated(tmp_path, session, change))
+
+
+def test_missing_field_and_missing_variable(tmp_path, session):
+    root = as_matlab(session)
+    names = [n for n in root["walking"].dtype.names if n != "delay_ms"]
+    root["walking"] = struct_array([{n: e[n] for n in names} for e in root["walking"][0]])
+    scipy.io.savemat(tmp_path / "a.mat", {"session": root})
+    with pytest.raises(
+        SessionFormatError, match=r"session\.walking\(1\)\.delay_ms: field is missing"
+    ):
+        read_matlab(tmp_path / "a.mat")
+    scipy.io.savemat(tmp_path / "b.mat", {"data": 1.0})
+    with pytest.raises(SessionFormatError, match=r"b\.mat: no variable 'session' \(found: data\)"):
+        read_matlab(tmp_path / "b.mat")
+    (tmp_path / "c.mat").write_bytes(b"not a mat file at all")
+    with pytest.raises(SessionFormatError, match=r"c\.mat: cannot read as a MAT file"):
+        read_matlab(tmp_path / "c.mat")
