@@ -1,0 +1,18 @@
+"""Estimators: impulse-response filters, 2nd-order impedance, bench stiffness."""
+
+from anklelab.ident.bench import BenchStiffness, bench_stiffness, interpolate_stiffness
+from anklelab.ident.impedance import ImpedanceFit, ImpedanceModel, fit_impedance
+from anklelab.ident.irf import FILTERS_FORMAT, INPUTS, ImpulseResponse, PlatformFilters
+
+__all__ = [
+    "FILTERS_FORMAT",
+    "INPUTS",
+    "BenchStiffness",
+    "ImpedanceFit",
+    "ImpedanceModel",
+    "ImpulseResponse",
+    "PlatformFilters",
+    "bench_stiffness",
+    "fit_impedance",
+    "interpolate_stiffness",
+]

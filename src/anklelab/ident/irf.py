@@ -1,0 +1,442 @@
+"""Impulse-response (FIR) filters from input-output correlations, and the platform filters.
+
+:class:`ImpulseResponse` estimates causal FIR filters from several parallel inputs to many
+outputs, ``y_c[n] = sum_i sum_k h_ci[k] u_i[n-k]``, with the correlation method: the input
+auto-correlations form a (block-)Toeplitz matrix that is solved once for every output channel
+at the same time. Low-pass inputs make that matrix ill-conditioned; the pseudo-inverse variant
+keeps only the eigenvector terms that earn their place by the minimum description length (MDL)
+criterion (Westwick & Kearney, *Identification of Nonlinear Physiological Systems*, ch. 5).
+
+:class:`PlatformFilters` applies it to paper 000's calibration (section 2.2): the motor angle,
+low-pass filtered and differentiated, drives the eight force channels of the unloaded plate. The
+paper uses the acceleration alone; a tilting plate also loads its sensors through gravity in
+proportion to the angle, so both pathways are the default here.
+"""
+
+from __future__ import annotations
+
+import json
+from collections.abc import Mapping, Sequence
+from pathlib import Path
+from typing import Any, Literal
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+from scipy.fft import irfft, next_fast_len, rfft
+from scipy.linalg import eigh, solve, solve_toeplitz
+
+from anklelab._version import __version__
+from anklelab.data._atomic import atomic_file
+from anklelab.errors import NotFittedError, ParameterError
+from anklelab.forceplate import CHANNELS
+from anklelab.signals import derivative, lowpass, vaf
+
+__all__ = ["FILTERS_FORMAT", "INPUTS", "ImpulseResponse", "PlatformFilters"]
+
+INPUTS = ("angle", "velocity", "acceleration")
+"""Input pathways a :class:`PlatformFilters` can use (motor angle and its derivatives)."""
+FILTERS_FORMAT = "anklelab-platform-filters/1"
+
+Method = Literal["pinv", "toeplitz"]
+Input = Literal["angle", "velocity", "acceleration"]
+
+
+def _as_batch(x: ArrayLike, name: str) -> NDArray[np.float64]:
+    x = np.asarray(x, dtype=float)
+    if x.ndim == 1:
+        x = x[None]
+    if x.ndim < 2 or x.shape[-1] < 2:
+        raise ParameterError(f"{name}: expected shape (..., n_signals, n_times), got {x.shape}")
+    if not np.all(np.isfinite(x)):
+        raise ParameterError(f"{name}: contains NaN or infinite values")
+    return x
+
+
+class ImpulseResponse:
+    """Multi-input, multi-output causal FIR filters by the correlation method.
+
+    Parameters
+    ----------
+    n_lags : int
+        Filter length in samples (lags 0 .. n_lags-1).
+    method : {"pinv", "toeplitz"}
+        ``"toeplitz"`` solves the normal equations directly (Levinson recursion for one input);
+        ``"pinv"`` uses the eigen-decomposition of the correlation matrix and keeps the terms
+        chosen by MDL, for ill-conditioned (low-pass) inputs.
+    order : int, optional
+        Number of eigenvector terms for ``"pinv"``; chosen by MDL when omitted.
+
+    Attributes
+    ----------
+    irf_ : ndarray, shape (n_outputs, n_inputs, n_lags)
+        Filter weights, output units per input unit per sample.
+    order_ : int
+        Number of terms used (``n_inputs * n_lags`` for ``"toeplitz"``).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> rng = np.random.default_rng(0)
+    >>> u = rng.normal(size=(2, 5000))
+    >>> h = np.zeros((1, 2, 10)); h[0, 0, 2], h[0, 1, :3] = 1.0, [0.5, 0.25, 0.125]
+    >>> est = ImpulseResponse(10).fit(u, np.array([np.convolve(u[0], h[0, 0])[:5000]
+    ...                                            + np.convolve(u[1], h[0, 1])[:5000]]))
+    >>> bool(np.allclose(est.irf_, h, atol=0.02))
+    True
+    """
+
+    def __init__(self, n_lags: int = 100, *, method: Method = "pinv", order: int | None = None):
+        self.n_lags = n_lags
+        self.method = method
+        self.order = order
+
+    def _check_params(self) -> None:
+        if int(self.n_lags) != self.n_lags or self.n_lags < 1:
+            raise ParameterError(f"n_lags: expected a positive integer, got {self.n_lags!r}")
+        if self.method not in ("pinv", "toeplitz"):
+            raise ParameterError(f"method: expected 'pinv' or 'toeplitz', got {self.method!r}")
+        if self.order is not None and (int(self.order) != self.order or self.order < 1):
+            raise ParameterError(f"order: expected a positive integer or None, got {self.order!r}")
+
+    def fit(self, u: ArrayLike, y: ArrayLike) -> ImpulseResponse:
+        """Estimate the filters.
+
+        Parameters
+        ----------
+        u : array_like, shape (..., n_inputs, n_times)
+            Inputs. Leading axes are independent records (trials) pooled into one estimate.
+        y : array_like, shape (..., n_outputs, n_times)
+            Outputs, same leading axes and length as ``u``.
+
+        Returns
+        -------
+        ImpulseResponse
+            ``self``, fitted.
+        """
+        self._check_params()
+        u, y = _as_batch(u, "u"), _as_batch(y, "y")
+        if u.shape[:-2] != y.shape[:-2] or u.shape[-1] != y.shape[-1]:
+            raise ParameterError(
+                f"u, y: leading axes and n_times must match, got {u.shape} and {y.shape}"
+            )
+        n_in, n_out, n_lags = u.shape[-2], y.shape[-2], int(self.n_lags)
+        u = u - u.mean(axis=-1, keepdims=True)
+        y = y - y.mean(axis=-1, keepdims=True)
+        scale = np.sqrt((u**2).mean(axis=(*range(u.ndim - 2), -1)))
+        if np.any(scale == 0):
+            raise ParameterError("u: an input is constant; it cannot drive a filter")
+        uu, uy, n_total = _correlations(u / scale[:, None], y, n_lags)
+        lag = np.arange(n_lags)
+        blocks = uu[:, :, (lag[:, None] - lag[None, :]) % uu.shape[-1]]  # c_ij[a - b]
+        phi = blocks.transpose(0, 2, 1, 3).reshape(n_in * n_lags, n_in * n_lags)
+        rhs = uy[:, :, :n_lags].transpose(0, 2, 1).reshape(n_in * n_lags, n_out)
+        if self.method == "toeplitz":
+            if n_in == 1:
+                h = solve_toeplitz(uu[0, 0, :n_lags], rhs)
+            else:
+                h = solve(phi, rhs, assume_a="pos")
+            self.order_ = n_in * n_lags
+        else:
+            y_var = (y**2).sum(axis=(*range(y.ndim - 2), -1)) / n_total
+            h, self.order_ = _pinv_mdl(phi, rhs, y_var, n_total, self.order)
+        self.irf_ = (h.reshape(n_in, n_lags, n_out) / scale[:, None, None]).transpose(2, 0, 1)
+        return self
+
+    def predict(self, u: ArrayLike) -> NDArray[np.float64]:
+        """Filter outputs for inputs ``u`` (zero initial conditions).
+
+        Parameters
+        ----------
+        u : array_like, shape (..., n_inputs, n_times)
+
+        Returns
+        -------
+        ndarray, shape (..., n_outputs, n_times)
+        """
+        irf = self._fitted()
+        u = _as_batch(u, "u")
+        if u.shape[-2] != irf.shape[1]:
+            raise ParameterError(f"u: expected {irf.shape[1]} inputs, got {u.shape[-2]}")
+        n = u.shape[-1]
+        nfft = next_fast_len(n + irf.shape[-1] - 1, real=True)
+        spectrum = np.einsum("...if,oif->...of", rfft(u, nfft), rfft(irf, nfft))
+        return irfft(spectrum, nfft)[..., :n]
+
+    def score(self, u: ArrayLike, y: ArrayLike) -> float:
+        """Mean over records of the VAF pooled over output channels, %."""
+        return float(np.mean(vaf(_as_batch(y, "y"), self.predict(u), pool=-2)))
+
+    def _fitted(self) -> NDArray[np.float64]:
+        if not hasattr(self, "irf_"):
+            raise NotFittedError(f"{type(self).__name__} is not fitted yet; call fit() first")
+        return self.irf_
+
+
+def _correlations(
+    u: NDArray[np.float64], y: NDArray[np.float64], n_lags: int
+) -> tuple[NDArray[np.float64], NDArray[np.float64], int]:
+    """Biased auto- and cross-correlations of all records, summed (FFT, no wrap-around).
+
+    Returns ``uu[i, j, m] = sum_n u_i[n] u_j[n+m] / N`` (negative ``m`` at the end) and
+    ``uy[i, c, k] = sum_n u_i[n] y_c[n+k] / N`` with ``N`` the total number of samples.
+    """
+    n = u.shape[-1]
+    nfft = next_fast_len(n + n_lags, real=True)
+    fu = rfft(u.reshape(-1, *u.shape[-2:]), nfft)
+    fy = rfft(y.reshape(-1, *y.shape[-2:]), nfft)
+    cuu = np.einsum("rif,rjf->ijf", fu.conj(), fu)
+    cuy = np.einsum("rif,rcf->icf", fu.conj(), fy)
+    n_total = n * fu.shape[0]
+    return irfft(cuu, nfft) / n_total, irfft(cuy, nfft) / n_total, n_total
+
+
+def _pinv_mdl(
+    phi: NDArray[np.float64],
+    rhs: NDArray[np.float64],
+    y_var: NDArray[np.float64],
+    n_samples: int,
+    order: int | None,
+) -> tuple[NDArray[np.float64], int]:
+    """Pseudo-inverse solution of ``phi @ h = rhs`` keeping the terms chosen by MDL.
+
+    Each eigenvector term explains ``(v' rhs_c)^2 / lambda`` of output ``c``'s variance; terms
+    are ranked by the variance they explain (each output normalised by its own variance, summed
+    over outputs) and the number kept minimises ``R(m) * (1 + m ln N / N)``, ``R(m)`` being the
+    unexplained normalised variance.
+    """
+    lam, vec = eigh(phi)
+    usable = lam > lam[-1] * phi.shape[0] * np.finfo(float).eps
+    lam, vec = lam[usable], vec[:, usable]
+    coord = vec.T @ rhs
+    gain = (coord**2 / lam[:, None] / np.where(y_var > 0, y_var, 1.0)).sum(axis=1)
+    rank = np.argsort(gain)[::-1]
+    if order is None:
+        m = np.arange(1, rank.size + 1)
+        residual = np.maximum(y_var.size - np.cumsum(gain[rank]), 0.0)
+        order = int(m[np.argmin(residual * (1.0 + m * np.log(n_samples) / n_samples))])
+    keep = rank[: min(int(order), rank.size)]
+    return vec[:, keep] @ (coord[keep] / lam[keep, None]), keep.size
+
+
+class PlatformFilters:
+    """The unloaded platform's force transients on every force channel, from the motor angle.
+
+    The motor angle is low-pass filtered (zero-phase Butterworth) and differentiated by a local
+    quadratic fit; the chosen pathways (angle, velocity, acceleration) feed one
+    :class:`ImpulseResponse` whose outputs are the equally filtered force channels. Walking
+    trials are corrected by subtracting :meth:`predict` from their filtered channels.
+
+    Parameters
+    ----------
+    inputs : sequence of {"angle", "velocity", "acceleration"}
+        Input pathways. Paper 000 uses ``("acceleration",)``; the default adds the angle, through
+        which gravity loads a tilting plate.
+    n_lags : int
+        Filter length, samples (paper 000: 100 at 1 kHz).
+    method : {"pinv", "toeplitz"}
+        See :class:`ImpulseResponse`.
+    cutoff_hz, filter_order : float, int
+        Low-pass applied to the motor angle and the forces (paper 000: 20 Hz, 4th order).
+    derivative_window : int
+        Samples per local polynomial fit for the derivatives (paper 000: 5).
+    channels : sequence of str
+        Names of the force channels, in the order of the ``forces`` arrays.
+
+    Attributes
+    ----------
+    irf_ : ndarray, shape (n_channels, n_inputs, n_lags)
+        Filter weights: N per (rad, rad/s or rad/s²) per sample.
+    fs_ : float
+        Sample rate the filters were fitted at, Hz.
+    order_ : int
+        Pseudo-inverse terms kept.
+    """
+
+    def __init__(
+        self,
+        inputs: Sequence[Input] = ("angle", "acceleration"),
+        *,
+        n_lags: int = 100,
+        method: Method = "pinv",
+        cutoff_hz: float = 20.0,
+        filter_order: int = 4,
+        derivative_window: int = 5,
+        channels: Sequence[str] = CHANNELS,
+    ) -> None:
+        self.inputs = tuple(inputs)
+        self.n_lags = n_lags
+        self.method = method
+        self.cutoff_hz = cutoff_hz
+        self.filter_order = filter_order
+        self.derivative_window = derivative_window
+        self.channels = tuple(channels)
+
+    def _check_inputs(self) -> None:
+        unknown = [name for name in self.inputs if name not in INPUTS]
+        if not self.inputs or unknown or len(set(self.inputs)) != len(self.inputs):
+            raise ParameterError(
+                f"inputs: expected distinct names among {', '.join(INPUTS)}, got {self.inputs!r}"
+            )
+
+    def input_signals(self, motor_angle: ArrayLike, fs: float) -> NDArray[np.float64]:
+        """The filter inputs for a motor angle: shape ``(..., n_inputs, n_times)``."""
+        self._check_inputs()
+        angle = lowpass(motor_angle, fs, self.cutoff_hz, order=self.filter_order)
+        signals = {"angle": angle}
+        for deriv, name in ((1, "velocity"), (2, "acceleration")):
+            if name in self.inputs:
+                signals[name] = derivative(angle, fs, self.derivative_window, deriv=deriv)
+        return np.stack([signals[name] for name in self.inputs], axis=-2)
+
+    def fit(self, motor_angle: ArrayLike, forces: ArrayLike, *, fs: float) -> PlatformFilters:
+        """Fit the filters on calibration data (nobody on the plate).
+
+        Parameters
+        ----------
+        motor_angle : array_like, shape (..., n_times)
+            Motor angle referred to the platform, rad (one or more records).
+        forces : array_like, shape (..., n_channels, n_times)
+            Force channels, N, unfiltered.
+        fs : float
+            Sample rate, Hz.
+
+        Returns
+        -------
+        PlatformFilters
+            ``self``, fitted.
+        """
+        forces = self._check_forces(forces)
+        est = ImpulseResponse(self.n_lags, method=self.method)
+        est.fit(self.input_signals(motor_angle, fs), self._filtered(forces, fs))
+        self.irf_, self.order_, self.fs_ = est.irf_, est.order_, float(fs)
+        self._estimator = est
+        return self
+
+    def _check_forces(self, forces: ArrayLike) -> NDArray[np.float64]:
+        forces = _as_batch(forces, "forces")
+        if forces.shape[-2] != len(self.channels):
+            raise ParameterError(
+                f"forces: expected {len(self.channels)} channels ({', '.join(self.channels)}) "
+                f"on axis -2, got {forces.shape[-2]}"
+            )
+        return forces
+
+    def _filtered(self, forces: NDArray[np.float64], fs: float) -> NDArray[np.float64]:
+        return lowpass(forces, fs, self.cutoff_hz, order=self.filter_order)
+
+    def predict(self, motor_angle: ArrayLike) -> NDArray[np.float64]:
+        """Platform force transients (low-pass domain), shape ``(..., n_channels, n_times)``, N.
+
+        ``motor_angle`` must be relative to the platform's resting angle (the angle pathway
+        predicts no force at rest).
+        """
+        est = self._fitted()
+        return est.predict(self.input_signals(motor_angle, self.fs_))
+
+    def vaf(
+        self, motor_angle: ArrayLike, forces: ArrayLike
+    ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """Held-out VAF per record, pooled over channels and per channel (DESIGN.md section 5).
+
+        Parameters
+        ----------
+        motor_angle : array_like, shape (..., n_times)
+        forces : array_like, shape (..., n_channels, n_times)
+            Unfiltered channels; they are filtered as in :meth:`fit`.
+
+        Returns
+        -------
+        pooled : ndarray, shape (...)
+            ``100 * (1 - sum_c var(residual_c) / sum_c var(force_c))`` per record, %.
+        by_channel : ndarray, shape (..., n_channels)
+            Each channel's own VAF per record, %.
+        """
+        est = self._fitted()
+        measured = self._filtered(self._check_forces(forces), self.fs_)
+        predicted = est.predict(self.input_signals(motor_angle, self.fs_))
+        return vaf(measured, predicted, pool=-2), vaf(measured, predicted)
+
+    def score(self, motor_angle: ArrayLike, forces: ArrayLike) -> float:
+        """Mean over records of the pooled VAF, %."""
+        return float(np.mean(self.vaf(motor_angle, forces)[0]))
+
+    def _fitted(self) -> ImpulseResponse:
+        if not hasattr(self, "irf_"):
+            raise NotFittedError(f"{type(self).__name__} is not fitted yet; call fit() first")
+        if not hasattr(self, "_estimator"):
+            self._estimator = ImpulseResponse(self.n_lags, method=self.method)
+            self._estimator.irf_ = self.irf_
+        return self._estimator
+
+    def to_dict(self, **extra: Any) -> dict[str, Any]:
+        """JSON-ready description of the fitted filters (``extra`` keys are added)."""
+        self._fitted()
+        return {
+            "format": FILTERS_FORMAT,
+            "anklelab_version": __version__,
+            "fs_hz": self.fs_,
+            "inputs": list(self.inputs),
+            "channels": list(self.channels),
+            "n_lags": int(self.n_lags),
+            "method": self.method,
+            "cutoff_hz": float(self.cutoff_hz),
+            "filter_order": int(self.filter_order),
+            "derivative_window": int(self.derivative_window),
+            "order": int(self.order_),
+            "irf": self.irf_.tolist(),
+            **extra,
+        }
+
+    def save(self, path: str | Path, **extra: Any) -> Path:
+        """Write the filters to a JSON file atomically; ``extra`` keys are stored alongside."""
+        text = json.dumps(self.to_dict(**extra), indent=1)
+        with atomic_file(path) as tmp:
+            tmp.write_text(text, encoding="utf-8")
+        return Path(path)
+
+    @classmethod
+    def from_dict(cls, data: Mapping[str, Any], *, origin: str = "filters") -> PlatformFilters:
+        """Rebuild fitted filters from :meth:`to_dict` output; errors name ``origin`` and key."""
+        if data.get("format") != FILTERS_FORMAT:
+            raise ParameterError(
+                f"{origin}: format: expected {FILTERS_FORMAT!r}, got {data.get('format')!r}"
+            )
+        try:
+            filters = cls(
+                data["inputs"],
+                n_lags=data["n_lags"],
+                method=data["method"],
+                cutoff_hz=data["cutoff_hz"],
+                filter_order=data["filter_order"],
+                derivative_window=data["derivative_window"],
+                channels=data["channels"],
+            )
+            irf = np.asarray(data["irf"], dtype=float)
+            fs, order = float(data["fs_hz"]), int(data["order"])
+        except KeyError as exc:
+            raise ParameterError(f"{origin}: required key {exc.args[0]!r} is missing") from None
+        except (TypeError, ValueError) as exc:
+            raise ParameterError(f"{origin}: malformed value: {exc}") from None
+        filters._check_inputs()
+        expected = (len(filters.channels), len(filters.inputs), filters.n_lags)
+        if irf.shape != expected or not np.all(np.isfinite(irf)):
+            raise ParameterError(
+                f"{origin}: irf: expected finite values of shape {expected} "
+                f"(channels, inputs, n_lags), got {irf.shape}"
+            )
+        filters.irf_, filters.fs_, filters.order_ = irf, fs, order
+        return filters
+
+    @classmethod
+    def load(cls, path: str | Path) -> PlatformFilters:
+        """Read filters written by :meth:`save`."""
+        path = Path(path)
+        try:
+            data = json.loads(path.read_text(encoding="utf-8"))
+        except FileNotFoundError:
+            raise ParameterError(f"{path}: filter file not found") from None
+        except json.JSONDecodeError as exc:
+            raise ParameterError(f"{path}: not valid JSON: {exc}") from None
+        if not isinstance(data, dict):
+            raise ParameterError(f"{path}: expected a JSON object")
+        return cls.from_dict(data, origin=str(path))

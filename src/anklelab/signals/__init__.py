@@ -1,0 +1,22 @@
+"""Signal processing: zero-phase filters, derivatives, event detection, trials (epochs), VAF."""
+
+from anklelab.signals.derivatives import derivative, kinematics
+from anklelab.signals.epochs import Trials, bootstrap_weights, epoch, stack_recordings
+from anklelab.signals.events import NOT_FOUND, Onsets, heel_contact, perturbation_onset
+from anklelab.signals.filters import lowpass
+from anklelab.signals.metrics import vaf
+
+__all__ = [
+    "NOT_FOUND",
+    "Onsets",
+    "Trials",
+    "bootstrap_weights",
+    "derivative",
+    "epoch",
+    "heel_contact",
+    "kinematics",
+    "lowpass",
+    "perturbation_onset",
+    "stack_recordings",
+    "vaf",
+]
