@@ -29,6 +29,7 @@ from anklelab.data.store import (
     session_hash,
     session_kind,
 )
+from anklelab.data.summary import summarize
 
 __all__ = [
     "BENCH_COLUMNS",
@@ -50,6 +51,7 @@ __all__ = [
     "save_session",
     "session_hash",
     "session_kind",
+    "summarize",
     "write_directory",
     "write_hdf5",
 ]

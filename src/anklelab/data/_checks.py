@@ -38,6 +38,7 @@ __all__ = [
     "RowLabel",
     "check_bench_tests",
     "check_columns",
+    "check_distance",
     "check_recording",
     "check_unique",
     "check_walking_row",
@@ -327,15 +328,19 @@ def check_walking_trials(file: str, trials: Iterable[tuple[WalkingTrial, str]]) 
     check_unique(((t.recording.name, w) for t, w in trials), "file", file)
 
 
+def check_distance(where: str, distance_m: float) -> None:
+    """A bench test's actuator distance must be a finite number > 0 m."""
+    if not (math.isfinite(distance_m) and distance_m > 0):
+        raise SessionFormatError(
+            f"{where}, column 'distance_m': got {distance_m!r}; expected a distance > 0 m"
+        )
+
+
 def check_bench_tests(file: str, tests: Iterable[tuple[BenchTest, str]]) -> None:
     """Unique test ids and files and positive distances across a bench manifest."""
     tests = list(tests)
     for test, where in tests:
-        if not (math.isfinite(test.distance_m) and test.distance_m > 0):
-            raise SessionFormatError(
-                f"{file}: {where}, column 'distance_m': got {test.distance_m!r}; expected a "
-                "distance > 0 m"
-            )
+        check_distance(f"{file}: {where}", test.distance_m)
     check_unique(((t.test, w) for t, w in tests), "test", file)
     check_unique(((t.recording.name, w) for t, w in tests), "file", file)
 

@@ -29,7 +29,8 @@ import json
 import math
 import re
 import tomllib
-from collections.abc import Iterable
+from collections.abc import Callable, Iterable, Iterator
+from functools import partial
 from pathlib import Path
 from typing import Any
 
@@ -38,16 +39,16 @@ import numpy as np
 from anklelab.data import _toml
 from anklelab.data._atomic import atomic_directory
 from anklelab.data._checks import (
-    check_bench_tests,
     check_columns,
+    check_distance,
     check_recording,
     check_unique,
     check_walking_row,
-    check_walking_trials,
     info_from_mapping,
     info_to_mapping,
     validate_session,
 )
+from anklelab.data._progress import Progress, ticker
 from anklelab.data._tree import from_json, to_json
 from anklelab.data.session import (
     BENCH_COLUMNS,
@@ -229,41 +230,61 @@ def _data_file(folder: Path, name: str, where: str) -> Path:
     return path
 
 
-def _walking(folder: Path, fs: float) -> tuple[WalkingTrial, ...]:
-    manifest = folder / "trials.csv"
+# Each manifest row, checked, with the data file to read and how to build the trial from it.
+Row = tuple[Path, Callable[[Recording], Any]]
+
+
+def _manifest_rows(
+    folder: Path, name: str, columns: tuple[str, ...]
+) -> Iterator[tuple[str, str, dict[str, str], Path, dict[str, str]]]:
+    """(line, location, fields, data file, extra fields) of each manifest row."""
+    manifest = folder / name
     if not manifest.is_file():
-        raise SessionFormatError(f"{manifest}: missing; a walking/ folder needs its manifest")
-    labelled = []
-    for line, row in _read_manifest(manifest, WALKING_MANIFEST_COLUMNS):
+        raise SessionFormatError(f"{manifest}: missing; a {folder.name}/ folder needs its manifest")
+    rows = _read_manifest(manifest, columns)
+    check_unique(((row["file"], line) for line, row in rows), "file", str(manifest))
+    for line, row in rows:
         where = f"{manifest}: {line}"
+        extra = {k: v for k, v in row.items() if k not in columns}
+        yield line, where, row, _data_file(folder, row["file"], where), extra
+
+
+def _walking_rows(folder: Path) -> list[Row]:
+    rows, ids = [], []
+    for line, where, row, path, extra in _manifest_rows(
+        folder, "trials.csv", WALKING_MANIFEST_COLUMNS
+    ):
         trial = _integer(row["trial"], where, "trial")
         perturbed = _flag(row["perturbed"], where, "perturbed")
         direction = row["direction"].lower()
         delay = _float(row["delay_ms"], where, "delay_ms", empty_ok=True)
         check_walking_row(where, perturbed, direction, delay)
-        recording = read_csv_recording(_data_file(folder, row["file"], where), WALKING_COLUMNS, fs)
-        extra = {k: v for k, v in row.items() if k not in WALKING_MANIFEST_COLUMNS}
-        labelled.append(
-            (WalkingTrial(trial, recording, perturbed, direction, delay, extra), line)  # type: ignore[arg-type]
+        ids.append((trial, line))
+        make = partial(
+            WalkingTrial,
+            trial=trial,
+            perturbed=perturbed,
+            direction=direction,
+            delay_ms=delay,
+            extra=extra,
         )
-    check_walking_trials(str(manifest), labelled)
-    return tuple(trial for trial, _ in labelled)
+        rows.append((path, make))
+    check_unique(ids, "trial", str(folder / "trials.csv"))
+    return rows
 
 
-def _bench(folder: Path, fs: float) -> tuple[BenchTest, ...]:
-    manifest = folder / "tests.csv"
-    if not manifest.is_file():
-        raise SessionFormatError(f"{manifest}: missing; a bench/ folder needs its manifest")
-    labelled = []
-    for line, row in _read_manifest(manifest, BENCH_MANIFEST_COLUMNS):
-        where = f"{manifest}: {line}"
+def _bench_rows(folder: Path) -> list[Row]:
+    rows, ids = [], []
+    for line, where, row, path, extra in _manifest_rows(
+        folder, "tests.csv", BENCH_MANIFEST_COLUMNS
+    ):
         test = _integer(row["test"], where, "test")
         distance = _float(row["distance_m"], where, "distance_m")
-        recording = read_csv_recording(_data_file(folder, row["file"], where), BENCH_COLUMNS, fs)
-        extra = {k: v for k, v in row.items() if k not in BENCH_MANIFEST_COLUMNS}
-        labelled.append((BenchTest(test, recording, distance, extra), line))
-    check_bench_tests(str(manifest), labelled)
-    return tuple(test for test, _ in labelled)
+        check_distance(where, distance)
+        ids.append((test, line))
+        rows.append((path, partial(BenchTest, test=test, distance_m=distance, extra=extra)))
+    check_unique(ids, "test", str(folder / "tests.csv"))
+    return rows
 
 
 def _natural(path: Path) -> list[Any]:
@@ -283,13 +304,15 @@ def _json_tree(path: Path) -> dict[str, Any] | None:
         raise SessionFormatError(f"{path}: {exc}") from None
 
 
-def read_directory(path: str | Path) -> Session:
+def read_directory(path: str | Path, *, progress: Progress | None = None) -> Session:
     """Read and validate a CSV session directory.
 
     Parameters
     ----------
     path : str or Path
         The session directory (holding ``session.toml``).
+    progress : callable, optional
+        Called as ``progress(done, total)`` after each recording is read.
 
     Returns
     -------
@@ -311,14 +334,19 @@ def read_directory(path: str | Path) -> Session:
         raise SessionFormatError(f"{toml_path}: not valid TOML: {exc}") from None
     info = info_from_mapping(document, str(toml_path))
     fs = info.sample_rate_hz
-    calibration_dir = root / "calibration"
-    calibration = tuple(
-        read_csv_recording(p, CALIBRATION_COLUMNS, fs)
-        for p in sorted(calibration_dir.glob("*.csv"), key=_natural)
-        if p.is_file()
-    )
-    walking = _walking(root / "walking", fs) if (root / "walking").is_dir() else ()
-    bench = _bench(root / "bench", fs) if (root / "bench").is_dir() else ()
+    calibration_files = sorted((root / "calibration").glob("*.csv"), key=_natural)
+    walking_rows = _walking_rows(root / "walking") if (root / "walking").is_dir() else []
+    bench_rows = _bench_rows(root / "bench") if (root / "bench").is_dir() else []
+    tick = ticker(progress, len(calibration_files) + len(walking_rows) + len(bench_rows))
+
+    def read(path: Path, required: tuple[str, ...]) -> Recording:
+        recording = read_csv_recording(path, required, fs)
+        tick()
+        return recording
+
+    calibration = tuple(read(p, CALIBRATION_COLUMNS) for p in calibration_files)
+    walking = tuple(make(recording=read(p, WALKING_COLUMNS)) for p, make in walking_rows)
+    bench = tuple(make(recording=read(p, BENCH_COLUMNS)) for p, make in bench_rows)
     return Session(
         info=info,
         calibration=calibration,
@@ -365,12 +393,19 @@ def _number_text(value: float) -> str:
     return "" if math.isnan(value) else repr(float(value))
 
 
-def write_directory(session: Session, path: str | Path, *, overwrite: bool = True) -> Path:
+def write_directory(
+    session: Session,
+    path: str | Path,
+    *,
+    overwrite: bool = True,
+    progress: Progress | None = None,
+) -> Path:
     """Write ``session`` as a CSV session directory, atomically.
 
     The session is validated first (the same checks as reading). The directory is built
     beside ``path`` under a temporary name and renamed into place; an existing ``path`` is
     replaced only if ``overwrite`` and it is a session directory (holds ``session.toml``).
+    ``progress``, if given, is called as ``progress(done, total)`` after each recording.
 
     Returns
     -------
@@ -387,19 +422,25 @@ def write_directory(session: Session, path: str | Path, *, overwrite: bool = Tru
     for i, test in enumerate(session.bench):
         _plain_name(test.recording.name, f"session.bench[{i}]")
     target = Path(path)
+    tick = ticker(progress, len(session.calibration) + len(session.walking) + len(session.bench))
+
+    def write(path: Path, recording: Recording) -> None:
+        write_csv_recording(path, recording)
+        tick()
+
     with atomic_directory(target, overwrite=overwrite) as tmp:
         text = _toml.dumps(info_to_mapping(session.info))
         (tmp / "session.toml").write_text(text, encoding="utf-8", newline="\n")
         if session.calibration:
             (tmp / "calibration").mkdir()
             for recording in session.calibration:
-                write_csv_recording(tmp / "calibration" / recording.name, recording)
+                write(tmp / "calibration" / recording.name, recording)
         if session.walking:
             folder = tmp / "walking"
             folder.mkdir()
             rows = []
             for t in session.walking:
-                write_csv_recording(folder / t.recording.name, t.recording)
+                write(folder / t.recording.name, t.recording)
                 rows.append(
                     dict(t.extra)
                     | {
@@ -417,7 +458,7 @@ def write_directory(session: Session, path: str | Path, *, overwrite: bool = Tru
             folder.mkdir()
             rows = []
             for b in session.bench:
-                write_csv_recording(folder / b.recording.name, b.recording)
+                write(folder / b.recording.name, b.recording)
                 rows.append(
                     dict(b.extra)
                     | {

@@ -35,6 +35,7 @@ from anklelab.data._checks import (
     info_to_mapping,
     validate_session,
 )
+from anklelab.data._progress import Progress, ticker
 from anklelab.data._tree import (
     create_group,
     link_name,
@@ -77,7 +78,13 @@ def _write_recording(parent: h5py.Group, recording: Recording, attrs: dict[str, 
         group.create_dataset(link_name(name), data=data, track_times=False)
 
 
-def write_hdf5(session: Session, path: str | Path, *, overwrite: bool = True) -> Path:
+def write_hdf5(
+    session: Session,
+    path: str | Path,
+    *,
+    overwrite: bool = True,
+    progress: Progress | None = None,
+) -> Path:
     """Write ``session`` to a native HDF5 file, atomically and deterministically.
 
     Parameters
@@ -88,6 +95,8 @@ def write_hdf5(session: Session, path: str | Path, *, overwrite: bool = True) ->
         Target file (``.h5``).
     overwrite : bool
         Replace an existing file; otherwise raise ``FileExistsError``.
+    progress : callable, optional
+        Called as ``progress(done, total)`` after each recording is written.
 
     Returns
     -------
@@ -95,6 +104,7 @@ def write_hdf5(session: Session, path: str | Path, *, overwrite: bool = True) ->
         ``path``.
     """
     validate_session(session)
+    tick = ticker(progress, len(session.calibration) + len(session.walking) + len(session.bench))
     target = Path(path)
     with (
         atomic_file(target, overwrite=overwrite) as tmp,
@@ -105,6 +115,7 @@ def write_hdf5(session: Session, path: str | Path, *, overwrite: bool = True) ->
         group = create_group(f, "calibration")
         for recording in session.calibration:
             _write_recording(group, recording, {})
+            tick()
         group = create_group(f, "walking")
         for t in session.walking:
             known = {
@@ -114,10 +125,12 @@ def write_hdf5(session: Session, path: str | Path, *, overwrite: bool = True) ->
                 "delay_ms": np.float64(t.delay_ms),
             }
             _write_recording(group, t.recording, dict(t.extra) | known)
+            tick()
         group = create_group(f, "bench")
         for b in session.bench:
             known = {"test": np.int64(b.test), "distance_m": np.float64(b.distance_m)}
             _write_recording(group, b.recording, dict(b.extra) | known)
+            tick()
         if session.truth is not None:
             write_h5_tree(create_group(f, "truth"), session.truth)
         write_h5_tree(create_group(f, "provenance"), session.provenance)
@@ -166,8 +179,10 @@ def _section(f: h5py.File, name: str) -> h5py.Group | None:
     return item
 
 
-def read_hdf5(path: str | Path) -> Session:
+def read_hdf5(path: str | Path, *, progress: Progress | None = None) -> Session:
     """Read and validate a native HDF5 session file.
+
+    ``progress``, if given, is called as ``progress(done, total)`` after each recording.
 
     Raises
     ------
@@ -198,19 +213,22 @@ def read_hdf5(path: str | Path) -> Session:
             raise SessionFormatError(f"{path}:/session: group is missing")
         info = info_from_mapping(read_h5_tree(f["session"]), str(path), "/session/")
         fs = info.sample_rate_hz
+        sections = {name: _section(f, name) for name in ("calibration", "walking", "bench")}
+        tick = ticker(progress, sum(len(g) for g in sections.values() if g is not None))
 
         def recording(section: str, link: str, group: h5py.Group, required: tuple[str, ...]):
             where = f"{path}:/{section}/{link}"
             columns = _columns(where, group)
             check_recording(where, columns, required, fs)
+            tick()
             return where, Recording(unlink_name(link), columns)
 
         calibration = []
-        if (section := _section(f, "calibration")) is not None:
+        if (section := sections["calibration"]) is not None:
             for link, group in section.items():
                 calibration.append(recording("calibration", link, group, CALIBRATION_COLUMNS)[1])
         walking = []
-        if (section := _section(f, "walking")) is not None:
+        if (section := sections["walking"]) is not None:
             for link, group in section.items():
                 where, rec = recording("walking", link, group, WALKING_COLUMNS)
                 trial = WalkingTrial(
@@ -225,7 +243,7 @@ def read_hdf5(path: str | Path) -> Session:
                 walking.append((trial, f"/walking/{link}"))
             check_walking_trials(str(path), walking)
         bench = []
-        if (section := _section(f, "bench")) is not None:
+        if (section := sections["bench"]) is not None:
             for link, group in section.items():
                 where, rec = recording("bench", link, group, BENCH_COLUMNS)
                 test = BenchTest(

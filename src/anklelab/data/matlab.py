@@ -34,7 +34,7 @@ v7.3 files (HDF5) with h5py. Errors name the MATLAB field, e.g. ``session.walkin
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from pathlib import Path
 from typing import Any
 
@@ -49,6 +49,7 @@ from anklelab.data._checks import (
     check_walking_trials,
     info_from_mapping,
 )
+from anklelab.data._progress import Progress, ticker
 from anklelab.data.session import (
     BENCH_COLUMNS,
     CALIBRATION_COLUMNS,
@@ -210,8 +211,10 @@ def _name(known: dict[str, Any], where: str, default: str) -> str:
     return _text(known["file"], f"{where}.file") if "file" in known else default
 
 
-def read_matlab(path: str | Path) -> Session:
+def read_matlab(path: str | Path, *, progress: Progress | None = None) -> Session:
     """Read a session from a MATLAB ``.mat`` file (layout in the module docstring).
+
+    ``progress``, if given, is called as ``progress(done, total)`` after each recording.
 
     Raises
     ------
@@ -231,12 +234,20 @@ def read_matlab(path: str | Path) -> Session:
     meta = {k: v for k, v in root.items() if k not in _SECTIONS}
     info = info_from_mapping(meta, str(path), "session.")
     fs = info.sample_rate_hz
-
-    def elements(section: str) -> list[tuple[str, str, dict[str, Any]]]:
-        """(location for messages, short label, struct) of each element of a section."""
+    sections = {}
+    for section in _SECTIONS:
         items = _elements(root.get(section, np.empty(0)), f"{path}: session.{section}")
         labels = [f"session.{section}({i + 1})" for i in range(len(items))]
-        return [(f"{path}: {label}", label, e) for label, e in zip(labels, items, strict=True)]
+        sections[section] = [
+            (f"{path}: {label}", label, e) for label, e in zip(labels, items, strict=True)
+        ]
+    tick = ticker(progress, sum(map(len, sections.values())))
+
+    def elements(section: str) -> Iterator[tuple[str, str, dict[str, Any]]]:
+        """(location for messages, short label, struct) of each element, ticking progress."""
+        for item in sections[section]:
+            yield item
+            tick()
 
     calibration = []
     for i, (where, _, element) in enumerate(elements("calibration")):

@@ -16,6 +16,7 @@ from typing import Any, Literal
 
 from anklelab._version import __version__
 from anklelab.data._checks import info_to_mapping
+from anklelab.data._progress import Progress
 from anklelab.data._tree import canonical, tree_differences
 from anklelab.data.directory import read_directory, write_directory
 from anklelab.data.hdf5 import is_hdf5, read_hdf5, write_hdf5
@@ -90,13 +91,15 @@ def session_hash(path: str | Path) -> str:
     return digest.hexdigest()
 
 
-def load_session(path: str | Path) -> Session:
+def load_session(path: str | Path, *, progress: Progress | None = None) -> Session:
     """Read and validate a session: a CSV directory, a native ``.h5`` or a MATLAB ``.mat``.
 
     Parameters
     ----------
     path : str or Path
         The session. The kind is detected (see :func:`session_kind`).
+    progress : callable, optional
+        Called as ``progress(done, total)`` after each recording is read.
 
     Returns
     -------
@@ -111,8 +114,9 @@ def load_session(path: str | Path) -> Session:
     """
     kind = session_kind(path)
     if kind == "h5":
-        return read_hdf5(path)
-    session = read_directory(path) if kind == "dir" else read_matlab(path)
+        return read_hdf5(path, progress=progress)
+    reader = read_directory if kind == "dir" else read_matlab
+    session = reader(path, progress=progress)
     provenance = dict(session.provenance)
     provenance.setdefault("anklelab_version", __version__)
     provenance["source_sha256"] = session_hash(path)
@@ -130,6 +134,7 @@ def save_session(
     *,
     format: Literal["h5", "dir"] = "h5",
     overwrite: bool = True,
+    progress: Progress | None = None,
 ) -> Path:
     """Write a session atomically (temporary file or directory beside ``path``, then rename).
 
@@ -144,6 +149,8 @@ def save_session(
     overwrite : bool
         Replace an existing target. A directory is only ever replaced if it holds a
         ``session.toml``.
+    progress : callable, optional
+        Called as ``progress(done, total)`` after each recording is written.
 
     Returns
     -------
@@ -151,9 +158,9 @@ def save_session(
         ``path``.
     """
     if format == "h5":
-        return write_hdf5(session, path, overwrite=overwrite)
+        return write_hdf5(session, path, overwrite=overwrite, progress=progress)
     if format == "dir":
-        return write_directory(session, path, overwrite=overwrite)
+        return write_directory(session, path, overwrite=overwrite, progress=progress)
     raise ValueError(f"format: expected 'h5' or 'dir', got {format!r}")
 
 
