@@ -7,7 +7,7 @@ from typing import Annotated
 import typer
 
 from anklelab import __version__
-from anklelab.commands import platform
+from anklelab.commands import importer, platform, session
 from anklelab.errors import AnklelabError
 
 app = typer.Typer(
@@ -17,6 +17,8 @@ app = typer.Typer(
     add_completion=False,
 )
 app.add_typer(platform.app, name="platform")
+app.add_typer(session.app, name="session")
+app.command("import")(importer.import_session)
 
 
 def _version(value: bool) -> None:
