@@ -73,9 +73,16 @@ def _write_recording(parent: h5py.Group, recording: Recording, attrs: dict[str, 
     group = create_group(parent, recording.name)
     for key, value in attrs.items():
         group.attrs[key] = value
+    # h5py's low-level calls: several times faster than create_dataset for ~10k small columns
+    dcpl = h5py.h5p.create(h5py.h5p.DATASET_CREATE)
+    dcpl.set_obj_track_times(False)
     for name, values in recording.columns.items():
-        data = np.asarray(values, dtype=np.float64)
-        group.create_dataset(link_name(name), data=data, track_times=False)
+        data = np.ascontiguousarray(values, dtype=np.float64)
+        space = h5py.h5s.create_simple(data.shape)
+        dataset = h5py.h5d.create(
+            group.id, link_name(name).encode(), h5py.h5t.IEEE_F64LE, space, dcpl=dcpl
+        )
+        dataset.write(h5py.h5s.ALL, h5py.h5s.ALL, data)
 
 
 def write_hdf5(
@@ -141,20 +148,32 @@ def write_hdf5(
 
 
 def _columns(where: str, group: h5py.Group) -> dict[str, np.ndarray]:
+    """Every dataset of a recording's group as a float64 column (low-level reads: ~30 us each)."""
     columns = {}
-    for link, item in group.items():
-        if not (isinstance(item, h5py.Dataset) and item.ndim == 1 and item.dtype.kind in "fiu"):
+    for link in group:
+        try:
+            dataset = h5py.h5d.open(group.id, link.encode())
+        except KeyError:
+            dataset = None
+        numeric = (h5py.h5t.FLOAT, h5py.h5t.INTEGER)
+        if (
+            dataset is None
+            or len(dataset.shape) != 1
+            or dataset.get_type().get_class() not in numeric
+        ):
             raise SessionFormatError(
-                f"{where}/{link}: expected a 1-D numeric dataset (one column), got {item!r}"
+                f"{where}/{link}: expected a 1-D numeric dataset (one column), got {group[link]!r}"
             )
-        columns[unlink_name(link)] = np.asarray(item[()], dtype=np.float64)
+        values = np.empty(dataset.shape, dtype=np.float64)
+        dataset.read(h5py.h5s.ALL, h5py.h5s.ALL, values)
+        columns[unlink_name(link)] = values
     return columns
 
 
-def _attr(where: str, group: h5py.Group, key: str, kind: type) -> Any:
-    if key not in group.attrs:
+def _attr(where: str, attrs: dict[str, Any], key: str, kind: type) -> Any:
+    if key not in attrs:
         raise SessionFormatError(f"{where}: attribute {key!r} is missing")
-    value = group.attrs[key]
+    value = attrs[key]
     ok = {
         int: isinstance(value, np.integer),
         bool: isinstance(value, np.bool_ | bool),
@@ -168,8 +187,8 @@ def _attr(where: str, group: h5py.Group, key: str, kind: type) -> Any:
     return kind(value)
 
 
-def _extra(group: h5py.Group, known: tuple[str, ...]) -> dict[str, str]:
-    return {k: str(v) for k, v in group.attrs.items() if k not in known}
+def _extra(attrs: dict[str, Any], known: tuple[str, ...]) -> dict[str, str]:
+    return {k: str(v) for k, v in attrs.items() if k not in known}
 
 
 def _section(f: h5py.File, name: str) -> h5py.Group | None:
@@ -231,13 +250,14 @@ def read_hdf5(path: str | Path, *, progress: Progress | None = None) -> Session:
         if (section := sections["walking"]) is not None:
             for link, group in section.items():
                 where, rec = recording("walking", link, group, WALKING_COLUMNS)
+                attrs = dict(group.attrs)
                 trial = WalkingTrial(
-                    trial=_attr(where, group, "trial", int),
+                    trial=_attr(where, attrs, "trial", int),
                     recording=rec,
-                    perturbed=_attr(where, group, "perturbed", bool),
-                    direction=_attr(where, group, "direction", str),  # type: ignore[arg-type]
-                    delay_ms=_attr(where, group, "delay_ms", float),
-                    extra=_extra(group, _WALKING_ATTRS),
+                    perturbed=_attr(where, attrs, "perturbed", bool),
+                    direction=_attr(where, attrs, "direction", str),  # type: ignore[arg-type]
+                    delay_ms=_attr(where, attrs, "delay_ms", float),
+                    extra=_extra(attrs, _WALKING_ATTRS),
                 )
                 check_walking_row(where, trial.perturbed, trial.direction, trial.delay_ms)
                 walking.append((trial, f"/walking/{link}"))
@@ -246,11 +266,12 @@ def read_hdf5(path: str | Path, *, progress: Progress | None = None) -> Session:
         if (section := sections["bench"]) is not None:
             for link, group in section.items():
                 where, rec = recording("bench", link, group, BENCH_COLUMNS)
+                attrs = dict(group.attrs)
                 test = BenchTest(
-                    test=_attr(where, group, "test", int),
+                    test=_attr(where, attrs, "test", int),
                     recording=rec,
-                    distance_m=_attr(where, group, "distance_m", float),
-                    extra=_extra(group, _BENCH_ATTRS),
+                    distance_m=_attr(where, attrs, "distance_m", float),
+                    extra=_extra(attrs, _BENCH_ATTRS),
                 )
                 bench.append((test, f"/bench/{link}"))
             check_bench_tests(str(path), bench)
