@@ -105,6 +105,16 @@ CASES = [
         r"trial_0002\.csv: column 'time_s', line 22: time step 0\.002 s; expected 0\.001 s",
     ),
     (
+        "time in milliseconds",
+        lambda d: set_times(d / TRIAL, np.arange(N) * 1.0),
+        r"trial_0002\.csv: column 'time_s': median time step 1 s .*is time in ms\?",
+    ),
+    (
+        "unnamed column",
+        lambda d: replace(d / TRIAL, "fz4", "fz4,"),
+        r"trial_0002\.csv: column 12 of the header \(line 1\) has no name",
+    ),
+    (
         "empty file",
         lambda d: (d / TRIAL).write_text(""),
         r"trial_0002\.csv: empty file.*expected a header line naming the columns time_s",
@@ -416,4 +426,46 @@ def test_writers_refuse_invalid_sessions(tmp_path, fmt):
         SessionFormatError, match=r"session\.walking\[1\] 'trial_0002\.csv': column 'fz1', sample 5"
     ):
         save_session(s, tmp_path / "out", format=fmt)
+    assert list(tmp_path.iterdir()) == []
+
+
+@pytest.mark.parametrize(
+    ("change", "pattern"),
+    [
+        (
+            lambda s: {"truth": {"fit": {"model": object()}}},
+            r"session\.truth: fit\.model: unsupported value of type object",
+        ),
+        (
+            lambda s: {"truth": {"ragged": [[1.0, 2.0], [3.0]]}},
+            r"session\.truth: ragged: ragged nested sequence",
+        ),
+        (
+            lambda s: {
+                "walking": (
+                    s.walking[0],
+                    type(s.walking[1])(**{**s.walking[1].__dict__, "extra": {"trial": "7"}}),
+                    *s.walking[2:],
+                )
+            },
+            r"session\.walking\[1\] 'trial_0002\.csv': extra manifest field 'trial'",
+        ),
+        (
+            lambda s: {
+                "calibration": (
+                    type(s.calibration[0])(
+                        "cal_01.csv", dict(s.calibration[0].columns) | {" emg": np.zeros(N)}
+                    ),
+                )
+            },
+            r"session\.calibration\[0\] 'cal_01\.csv': column name ' emg'",
+        ),
+    ],
+)
+def test_writers_check_trees_names_and_extras(tmp_path, change, pattern):
+    from dataclasses import replace as dc_replace
+
+    s = random_session()
+    with pytest.raises(SessionFormatError, match=pattern):
+        save_session(dc_replace(s, **change(s)), tmp_path / "out.h5")
     assert list(tmp_path.iterdir()) == []

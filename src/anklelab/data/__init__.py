@@ -12,10 +12,12 @@ from anklelab.data.hdf5 import H5_FORMAT, read_hdf5, write_hdf5
 from anklelab.data.matlab import read_matlab
 from anklelab.data.session import (
     BENCH_COLUMNS,
+    BENCH_MANIFEST_COLUMNS,
     CALIBRATION_COLUMNS,
     DIRECTIONS,
     SESSION_FORMAT,
     WALKING_COLUMNS,
+    WALKING_MANIFEST_COLUMNS,
     BenchTest,
     Recording,
     Session,
@@ -33,11 +35,13 @@ from anklelab.data.summary import summarize
 
 __all__ = [
     "BENCH_COLUMNS",
+    "BENCH_MANIFEST_COLUMNS",
     "CALIBRATION_COLUMNS",
     "DIRECTIONS",
     "H5_FORMAT",
     "SESSION_FORMAT",
     "WALKING_COLUMNS",
+    "WALKING_MANIFEST_COLUMNS",
     "BenchTest",
     "Recording",
     "Session",

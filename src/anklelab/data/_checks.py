@@ -20,11 +20,14 @@ from anklelab._params import parameters_from_mapping
 from anklelab.data._tree import canonical
 from anklelab.data.session import (
     BENCH_COLUMNS,
+    BENCH_MANIFEST_COLUMNS,
     CALIBRATION_COLUMNS,
     DIRECTIONS,
     SESSION_FORMAT,
     WALKING_COLUMNS,
+    WALKING_MANIFEST_COLUMNS,
     BenchTest,
+    Recording,
     Session,
     SessionInfo,
     WalkingTrial,
@@ -261,10 +264,15 @@ def check_recording(
     period = 1.0 / fs
     median = float(np.median(step))
     if abs(median - period) > RATE_TOLERANCE * period:
+        unit_hint = (
+            " (is time in ms? time_s must be in seconds)"
+            if (abs(median / 1000 - period) <= RATE_TOLERANCE * period)
+            else ""
+        )
         raise SessionFormatError(
             f"{file}: column 'time_s': median time step {median:.6g} s ({1 / median:.6g} Hz) "
             f"does not match session.toml sample_rate_hz = {fs:g} (step {period:.6g} s, "
-            f"tolerance {RATE_TOLERANCE:.0%})"
+            f"tolerance {RATE_TOLERANCE:.0%}){unit_hint}"
         )
     jitter = np.abs(step - period)
     if (jitter > MAX_STEP_JITTER * period).any():
@@ -348,27 +356,51 @@ def check_bench_tests(file: str, tests: Iterable[tuple[BenchTest, str]]) -> None
 # --- whole sessions (before writing) ------------------------------------------------------------
 
 
+def _check_names(where: str, recording: Recording) -> None:
+    for name in recording.columns:
+        if not isinstance(name, str) or not name or name != name.strip() or "\n" in name:
+            raise SessionFormatError(
+                f"{where}: column name {name!r}; expected non-empty text without surrounding "
+                "spaces or line breaks"
+            )
+
+
+def _check_extra(where: str, extra: Mapping[str, str], reserved: tuple[str, ...]) -> None:
+    for key, value in extra.items():
+        if key in reserved or not isinstance(value, str):
+            raise SessionFormatError(
+                f"{where}: extra manifest field {key!r} = {value!r}; expected a text value under "
+                f"a name other than {', '.join(reserved)}"
+            )
+
+
 def validate_session(session: Session, origin: str = "session") -> None:
     """Apply every reader check to an in-memory session, so writers never store what readers
     would reject. Messages name ``origin`` and the recording (``walking[3] 'trial_0004.csv'``)."""
     info_from_mapping(info_to_mapping(session.info), f"{origin}.info")
+    for name in ("truth", "provenance"):
+        tree = getattr(session, name)
+        try:
+            canonical(tree or {})
+        except ValueError as exc:
+            raise SessionFormatError(f"{origin}.{name}: {exc}") from None
     fs = session.info.sample_rate_hz
     for i, rec in enumerate(session.calibration):
-        check_recording(
-            f"{origin}.calibration[{i}] {rec.name!r}", rec.columns, CALIBRATION_COLUMNS, fs
-        )
+        where = f"{origin}.calibration[{i}] {rec.name!r}"
+        _check_names(where, rec)
+        check_recording(where, rec.columns, CALIBRATION_COLUMNS, fs)
     labelled = []
     for i, trial in enumerate(session.walking):
         where = f"{origin}.walking[{i}] {trial.recording.name!r}"
         check_walking_row(where, trial.perturbed, trial.direction, trial.delay_ms)
+        _check_names(where, trial.recording)
+        _check_extra(where, trial.extra, WALKING_MANIFEST_COLUMNS)
         check_recording(where, trial.recording.columns, WALKING_COLUMNS, fs)
         labelled.append((trial, f"walking[{i}]"))
     check_walking_trials(f"{origin}.walking", labelled)
     for i, test in enumerate(session.bench):
-        check_recording(
-            f"{origin}.bench[{i}] {test.recording.name!r}",
-            test.recording.columns,
-            BENCH_COLUMNS,
-            fs,
-        )
+        where = f"{origin}.bench[{i}] {test.recording.name!r}"
+        _check_names(where, test.recording)
+        _check_extra(where, test.extra, BENCH_MANIFEST_COLUMNS)
+        check_recording(where, test.recording.columns, BENCH_COLUMNS, fs)
     check_bench_tests(f"{origin}.bench", ((t, f"bench[{i}]") for i, t in enumerate(session.bench)))

@@ -52,8 +52,10 @@ from anklelab.data._progress import Progress, ticker
 from anklelab.data._tree import from_json, to_json
 from anklelab.data.session import (
     BENCH_COLUMNS,
+    BENCH_MANIFEST_COLUMNS,
     CALIBRATION_COLUMNS,
     WALKING_COLUMNS,
+    WALKING_MANIFEST_COLUMNS,
     BenchTest,
     Recording,
     Session,
@@ -62,16 +64,11 @@ from anklelab.data.session import (
 from anklelab.errors import SessionFormatError
 
 __all__ = [
-    "BENCH_MANIFEST_COLUMNS",
-    "WALKING_MANIFEST_COLUMNS",
     "read_csv_recording",
     "read_directory",
     "write_csv_recording",
     "write_directory",
 ]
-
-WALKING_MANIFEST_COLUMNS = ("trial", "file", "perturbed", "direction", "delay_ms")
-BENCH_MANIFEST_COLUMNS = ("test", "file", "distance_m")
 
 
 # --- reading ------------------------------------------------------------------------------------
@@ -96,6 +93,11 @@ def _header(path: Path, text: str, required: tuple[str, ...]) -> list[str]:
             f"{', '.join(required)}"
         )
     names = [name.strip() for name in next(csv.reader([first]))]
+    if "" in names:
+        raise SessionFormatError(
+            f"{path}: column {names.index('') + 1} of the header (line 1) has no name; expected "
+            "a name for every column"
+        )
     check_columns(str(path), names, required, "header (line 1)")
     return names
 
@@ -429,7 +431,10 @@ def write_directory(
         tick()
 
     with atomic_directory(target, overwrite=overwrite) as tmp:
-        text = _toml.dumps(info_to_mapping(session.info))
+        try:
+            text = _toml.dumps(info_to_mapping(session.info))
+        except ValueError as exc:
+            raise SessionFormatError(f"session.info.extra: {exc}") from None
         (tmp / "session.toml").write_text(text, encoding="utf-8", newline="\n")
         if session.calibration:
             (tmp / "calibration").mkdir()

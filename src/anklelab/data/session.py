@@ -21,10 +21,12 @@ from anklelab.forceplate import CHANNELS, PlateGeometry
 
 __all__ = [
     "BENCH_COLUMNS",
+    "BENCH_MANIFEST_COLUMNS",
     "CALIBRATION_COLUMNS",
     "DIRECTIONS",
     "SESSION_FORMAT",
     "WALKING_COLUMNS",
+    "WALKING_MANIFEST_COLUMNS",
     "BenchTest",
     "Recording",
     "Session",
@@ -36,6 +38,8 @@ SESSION_FORMAT = "anklelab-session/1"
 CALIBRATION_COLUMNS = ("time_s", "motor_angle", *CHANNELS)
 WALKING_COLUMNS = ("time_s", "motor_angle", "ankle_angle", *CHANNELS)
 BENCH_COLUMNS = ("time_s", "displacement_m", "force_n")
+WALKING_MANIFEST_COLUMNS = ("trial", "file", "perturbed", "direction", "delay_ms")
+BENCH_MANIFEST_COLUMNS = ("test", "file", "distance_m")
 DIRECTIONS = ("dorsi", "plantar", "none")
 Direction = Literal["dorsi", "plantar", "none"]
 
