@@ -25,8 +25,8 @@ from numpy.typing import ArrayLike, NDArray
 from scipy.fft import irfft, next_fast_len, rfft
 from scipy.linalg import eigh, solve, solve_toeplitz
 
+from anklelab._atomic import write_text_atomic
 from anklelab._version import __version__
-from anklelab.data._atomic import atomic_file
 from anklelab.errors import NotFittedError, ParameterError
 from anklelab.forceplate import CHANNELS
 from anklelab.signals import derivative, lowpass, vaf
@@ -389,10 +389,7 @@ class PlatformFilters:
 
     def save(self, path: str | Path, **extra: Any) -> Path:
         """Write the filters to a JSON file atomically; ``extra`` keys are stored alongside."""
-        text = json.dumps(self.to_dict(**extra), indent=1)
-        with atomic_file(path) as tmp:
-            tmp.write_text(text, encoding="utf-8")
-        return Path(path)
+        return write_text_atomic(path, json.dumps(self.to_dict(**extra), indent=1))
 
     @classmethod
     def from_dict(cls, data: Mapping[str, Any], *, origin: str = "filters") -> PlatformFilters:

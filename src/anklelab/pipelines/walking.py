@@ -1,0 +1,646 @@
+"""Walking impedance: from a recorded session to ankle stiffness with uncertainty (paper 000).
+
+The steps follow paper 000 (sections 2.2, 2.3, 2.4.2, 3) and DESIGN.md section 5:
+
+1. **Platform filters** from the calibration trials (nobody on the plate): fitted on one trial,
+   scored on the others (VAF per trial, pooled over channels, and per channel).
+2. **Walking trials**: channels and motor angle zeroed over an unloaded baseline at the start of
+   each file; heel contact detected from the vertical force; the platform's own force transients
+   predicted from the motor angle and subtracted from the low-passed channels; GRF, COP and
+   ankle torque computed with the COP and the ankle angle zeroed at heel contact; derivatives
+   of the angle by a local quadratic fit; the true perturbation onset detected from the motor
+   angle. Trials that fail a check are dropped with the reason logged.
+3. **Ensembles**: for each timing point (manifest ``delay_ms``) and direction, every perturbed
+   trial is cut at its own detected onset and the mean unperturbed trial, cut at the same time
+   after heel contact, is subtracted; angle and torque offsets (read before the low-pass has
+   spread the perturbation backwards in time) are removed; bootstrap averages of random
+   subsets of the perturbed trials are formed.
+4. **Model**: ``T = I θ'' + b θ' + k θ`` fitted to each bootstrap average over the analysis
+   window and the sensitivity windows; ``cop_m`` is the θ²-weighted nominal lever arm.
+5. **Bench**: stiffness per actuator distance and the walking-vs-bench error at ``cop_m``.
+
+Everything is read from the session (sample rate, plate geometry and mounting, subject geometry,
+trial manifest); no number of the digital twin is assumed.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass, replace
+from typing import Any, Literal
+
+import numpy as np
+from numpy.typing import NDArray
+from pydantic import Field, model_validator
+
+from anklelab._params import Parameters
+from anklelab._version import __version__
+from anklelab.data.session import Session, WalkingTrial
+from anklelab.errors import ParameterError, SessionFormatError
+from anklelab.forceplate import (
+    CHANNELS,
+    PlateGeometry,
+    ankle_torque,
+    resultants,
+    sagittal_load,
+)
+from anklelab.ident.bench import BenchStiffness, bench_stiffness, interpolate_stiffness
+from anklelab.ident.impedance import fit_impedance
+from anklelab.ident.irf import PlatformFilters
+from anklelab.signals import (
+    Trials,
+    epoch,
+    heel_contact,
+    kinematics,
+    lowpass,
+    perturbation_onset,
+    stack_recordings,
+)
+
+__all__ = [
+    "STANCE_CHANNELS",
+    "STEPS",
+    "TimingPoint",
+    "WalkingResults",
+    "WalkingSettings",
+    "analyze_walking",
+    "fit_platform_filters",
+]
+
+STEPS = ("platform filters", "walking trials", "ensembles and bootstrap", "bench")
+"""Names of the pipeline's steps, in order (reported to the ``progress`` callback)."""
+
+STANCE_CHANNELS = ("angle", "velocity", "acceleration", "torque", "dx", "grf_z", "motor_angle")
+"""Channels of the heel-contact-aligned stance trials (rad, rad/s, rad/s², N·m, m, N, rad)."""
+_KIN = [0, 1, 2]
+_ANGLE, _TORQUE, _DX = 0, 3, 4
+_DIRECTIONS = ("dorsi", "plantar")
+
+
+class WalkingSettings(Parameters):
+    """Every setting of the walking analysis, validated (defaults from paper 000).
+
+    Attributes
+    ----------
+    cutoff_hz, filter_order
+        Zero-phase Butterworth low-pass for all signals (paper 000: 20 Hz, 4th order).
+    derivative_window
+        Samples per local quadratic fit for derivatives (paper 000: the point and 4 around it).
+    heel_contact_threshold_n, heel_contact_hold_ms
+        Vertical force that marks heel contact (paper 000: 25 N) and how long it must hold.
+    contact_cop_ms
+        The COP at heel contact (where the COP is zeroed) is the intercept of a line fitted to
+        the unfiltered COP over this span after contact.
+    baseline_ms
+        Unloaded span at the start of each walking file used to zero channels and motor angle.
+    onset_min_amplitude_rad
+        Smallest motor-angle excursion that counts as a perturbation.
+    filter_inputs, n_lags, filter_method, calibration_fit_trial
+        Platform filters: input pathways, length (samples), estimator, calibration trial
+        (index) they are fitted on; the other calibration trials score them.
+    window_ms, sensitivity_windows_ms
+        Impedance analysis window after the onset and the alternative windows checked.
+    offset_reference_ms
+        How long before each detected onset the angle and torque offsets are read. Paper 000
+        zeroes both at the window start, but the zero-phase low-pass spreads the perturbation
+        about 1.5/cutoff_hz s backwards in time, so at the onset the filtered acceleration is at
+        its peak and the torque offset removed there contains ``I θ'' + b θ'`` that the angle
+        offset does not: on data with known K, B, I this biases stiffness by about -15 % and
+        inertia by -60 %. Reading the offsets before the spread (80 ms at 20 Hz) removes the
+        bias; 0 reproduces the paper literally.
+    bootstrap_reps, bootstrap_fraction, seed
+        Bootstrap: repetitions, fraction of the perturbed trials per repetition, seed.
+    """
+
+    cutoff_hz: float = Field(20.0, gt=0)
+    filter_order: int = Field(4, ge=1, le=12)
+    derivative_window: int = Field(5, ge=3)
+    heel_contact_threshold_n: float = Field(25.0, gt=0)
+    heel_contact_hold_ms: float = Field(5.0, ge=0)
+    contact_cop_ms: float = Field(20.0, gt=0)
+    baseline_ms: float = Field(50.0, gt=0)
+    onset_min_amplitude_rad: float = Field(0.005, gt=0)
+    filter_inputs: tuple[Literal["angle", "velocity", "acceleration"], ...] = Field(
+        ("angle", "acceleration"), min_length=1
+    )
+    n_lags: int = Field(100, ge=1)
+    filter_method: Literal["pinv", "toeplitz"] = "pinv"
+    calibration_fit_trial: int = Field(0, ge=0)
+    window_ms: float = Field(100.0, gt=0)
+    offset_reference_ms: float = Field(80.0, ge=0)
+    sensitivity_windows_ms: tuple[float, ...] = (75.0, 125.0)
+    bootstrap_reps: int = Field(100, ge=1)
+    bootstrap_fraction: float = Field(0.6, gt=0, le=1)
+    seed: int = Field(0, ge=0)
+
+    @model_validator(mode="after")
+    def _consistent(self) -> WalkingSettings:
+        if self.derivative_window % 2 == 0:
+            raise ValueError(
+                f"derivative_window: expected an odd number, got {self.derivative_window}"
+            )
+        if len(set(self.filter_inputs)) != len(self.filter_inputs):
+            raise ValueError(f"filter_inputs: expected distinct names, got {self.filter_inputs}")
+        if any(w <= 0 for w in self.sensitivity_windows_ms):
+            raise ValueError(
+                f"sensitivity_windows_ms: expected > 0, got {self.sensitivity_windows_ms}"
+            )
+        return self
+
+    def windows_ms(self) -> tuple[float, ...]:
+        """The analysis window followed by the sensitivity windows, ms."""
+        return (self.window_ms, *(w for w in self.sensitivity_windows_ms if w != self.window_ms))
+
+
+@dataclass(frozen=True)
+class TimingPoint:
+    """Impedance at one timing point and direction.
+
+    Attributes
+    ----------
+    delay_ms : float
+        Intended timing point after heel contact (the manifest's grouping key), ms.
+    direction : {"dorsi", "plantar"}
+    n_perturbed, n_unperturbed : int
+        Trials used.
+    cop_m : float
+        Lever arm of the estimate: nominal ``dx`` weighted by θ² over the window, m.
+    stiffness, damping, inertia, vaf : ndarray, shape (n_reps,)
+        Bootstrap values: N·m/rad, N·m·s/rad, kg·m², %.
+    window_stiffness : dict of str to float
+        Mean stiffness for each sensitivity window (key: window in ms, ``"75"``), N·m/rad.
+    onset_ms : ndarray
+        Detected onset of each perturbed trial after its heel contact, ms.
+    time_s : ndarray
+        Time after the onset over the analysis window, s.
+    angle, torque, model_torque : ndarray, shape (n_reps, n_window)
+        Bootstrap perturbation angle (rad), measured and model torque (N·m).
+    """
+
+    delay_ms: float
+    direction: str
+    n_perturbed: int
+    n_unperturbed: int
+    cop_m: float
+    stiffness: NDArray[np.float64]
+    damping: NDArray[np.float64]
+    inertia: NDArray[np.float64]
+    vaf: NDArray[np.float64]
+    window_stiffness: dict[str, float]
+    onset_ms: NDArray[np.float64]
+    time_s: NDArray[np.float64]
+    angle: NDArray[np.float64]
+    torque: NDArray[np.float64]
+    model_torque: NDArray[np.float64]
+
+    @property
+    def key(self) -> str:
+        """Condition key, e.g. ``"dorsi/225"``."""
+        return f"{self.direction}/{self.delay_ms:g}"
+
+
+@dataclass(frozen=True)
+class WalkingResults:
+    """Everything the walking analysis produced.
+
+    Attributes
+    ----------
+    settings : WalkingSettings
+    filters : PlatformFilters
+        The platform filters used.
+    filter_vaf, filter_vaf_by_channel : ndarray
+        Held-out VAF per calibration trial, pooled (n_held,) and per channel (n_held, 8), %.
+    timing_points : list of TimingPoint
+    bench : list of BenchStiffness
+    stance : Trials
+        Kept walking trials aligned at heel contact (:data:`STANCE_CHANNELS`), with metadata
+        ``condition``, ``trial``, ``heel_contact_s``, ``onset_s`` (detected, NaN if unperturbed),
+        ``onset_ms`` (after heel contact) and a drop log naming why each other trial was dropped.
+    """
+
+    settings: WalkingSettings
+    filters: PlatformFilters
+    filter_vaf: NDArray[np.float64]
+    filter_vaf_by_channel: NDArray[np.float64]
+    timing_points: list[TimingPoint]
+    bench: list[BenchStiffness]
+    stance: Trials
+
+    def validation(self) -> list[dict[str, float]]:
+        """Dorsiflexion estimates against the bench stiffness interpolated at ``cop_m``."""
+        if not self.bench:
+            return []
+        rows = []
+        for tp in self.timing_points:
+            if tp.direction != "dorsi":
+                continue
+            bench = float(interpolate_stiffness(self.bench, tp.cop_m))
+            walking = float(np.mean(tp.stiffness))
+            rows.append(
+                {
+                    "delay_ms": tp.delay_ms,
+                    "cop_m": tp.cop_m,
+                    "bench_stiffness_nm_per_rad": bench,
+                    "error_percent": (walking - bench) / bench * 100.0,
+                }
+            )
+        return rows
+
+    def to_dict(self, session: str) -> dict[str, Any]:
+        """The ``results.json`` document (DESIGN.md section 5), ``session`` naming the input."""
+        by_channel = self.filter_vaf_by_channel.mean(axis=0)
+        return _finite(
+            {
+                "anklelab_version": __version__,
+                "session": session,
+                "settings": self.settings.model_dump(mode="json"),
+                "platform_filters": {
+                    "n_lags": int(self.filters.n_lags),
+                    "vaf_percent_mean": float(np.mean(self.filter_vaf)),
+                    "vaf_percent_sd": _sd(self.filter_vaf),
+                    "vaf_percent_by_channel": dict(
+                        zip(self.filters.channels, map(float, by_channel), strict=True)
+                    ),
+                },
+                "timing_points": [
+                    {
+                        "delay_ms": tp.delay_ms,
+                        "direction": tp.direction,
+                        "n_perturbed": tp.n_perturbed,
+                        "n_unperturbed": tp.n_unperturbed,
+                        "cop_m": tp.cop_m,
+                        "stiffness_nm_per_rad": _summary(tp.stiffness),
+                        "damping_nms_per_rad": _summary(tp.damping),
+                        "inertia_kgm2": _summary(tp.inertia),
+                        "vaf_percent": _summary(tp.vaf),
+                        "window_sensitivity": {
+                            key: {"stiffness_nm_per_rad": value}
+                            for key, value in tp.window_stiffness.items()
+                        },
+                    }
+                    for tp in self.timing_points
+                ],
+                "bench": [row._asdict() for row in self.bench],
+                "validation": self.validation(),
+            }
+        )
+
+    def table(self) -> list[dict[str, Any]]:
+        """One row per timing point and direction, for a CSV file."""
+        check = {row["delay_ms"]: row for row in self.validation()}
+        rows = []
+        for tp in self.timing_points:
+            row: dict[str, Any] = {
+                "delay_ms": tp.delay_ms,
+                "direction": tp.direction,
+                "n_perturbed": tp.n_perturbed,
+                "n_unperturbed": tp.n_unperturbed,
+                "onset_ms_mean": float(np.mean(tp.onset_ms)),
+                "onset_ms_sd": _sd(tp.onset_ms),
+                "cop_m": tp.cop_m,
+            }
+            for name, values in (
+                ("stiffness_nm_per_rad", tp.stiffness),
+                ("damping_nms_per_rad", tp.damping),
+                ("inertia_kgm2", tp.inertia),
+                ("vaf_percent", tp.vaf),
+            ):
+                row[f"{name}_mean"], row[f"{name}_sd"] = float(np.mean(values)), _sd(values)
+            for key, value in tp.window_stiffness.items():
+                row[f"stiffness_nm_per_rad_{key}ms"] = value
+            match = check.get(tp.delay_ms) if tp.direction == "dorsi" else None
+            row["bench_stiffness_nm_per_rad"] = match and match["bench_stiffness_nm_per_rad"]
+            row["error_percent"] = match and match["error_percent"]
+            rows.append(row)
+        return rows
+
+
+def _sd(values: NDArray[np.float64]) -> float:
+    return float(np.std(values, ddof=1)) if np.size(values) > 1 else 0.0
+
+
+def _summary(values: NDArray[np.float64]) -> dict[str, float]:
+    return {"mean": float(np.mean(values)), "sd": _sd(values)}
+
+
+def _finite(node: Any) -> Any:
+    """JSON has no NaN: non-finite floats become ``None``."""
+    if isinstance(node, dict):
+        return {key: _finite(value) for key, value in node.items()}
+    if isinstance(node, list | tuple):
+        return [_finite(value) for value in node]
+    if isinstance(node, float) and not np.isfinite(node):
+        return None
+    return node
+
+
+def fit_platform_filters(
+    session: Session, settings: WalkingSettings | None = None
+) -> tuple[PlatformFilters, NDArray[np.float64], NDArray[np.float64]]:
+    """Fit platform filters on one calibration trial and score them on the others.
+
+    Parameters
+    ----------
+    session : Session
+        Needs at least one calibration recording.
+    settings : WalkingSettings, optional
+        Filter settings (``filter_inputs``, ``n_lags``, ``filter_method``,
+        ``calibration_fit_trial``, ``cutoff_hz``, ``filter_order``, ``derivative_window``).
+
+    Returns
+    -------
+    filters : PlatformFilters
+    vaf : ndarray, shape (n_held_out,)
+        Pooled VAF per held-out trial, %. With a single calibration trial it is scored on
+        itself (in-sample).
+    vaf_by_channel : ndarray, shape (n_held_out, n_channels)
+    """
+    settings = settings or WalkingSettings()
+    calibration = session.calibration
+    if not calibration:
+        raise SessionFormatError("calibration/: the session has no calibration trials")
+    fit_index = settings.calibration_fit_trial
+    if fit_index >= len(calibration):
+        raise ParameterError(
+            f"calibration_fit_trial: expected an index below {len(calibration)} "
+            f"(calibration trials in the session), got {fit_index}"
+        )
+    fs = session.info.sample_rate_hz
+    filters = PlatformFilters(
+        settings.filter_inputs,
+        n_lags=settings.n_lags,
+        method=settings.filter_method,
+        cutoff_hz=settings.cutoff_hz,
+        filter_order=settings.filter_order,
+        derivative_window=settings.derivative_window,
+    )
+    fit_rec = calibration[fit_index]
+    filters.fit(fit_rec["motor_angle"], fit_rec.stack(CHANNELS), fs=fs)
+    held_out = [rec for i, rec in enumerate(calibration) if i != fit_index] or [fit_rec]
+    return (filters, *_score_filters(filters, held_out))
+
+
+def _score_filters(
+    filters: PlatformFilters, recordings: list[Any]
+) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    scores = [filters.vaf(rec["motor_angle"], rec.stack(CHANNELS)) for rec in recordings]
+    return np.array([s[0] for s in scores]), np.array([s[1] for s in scores])
+
+
+def _condition(trial: WalkingTrial) -> str:
+    return f"{trial.direction}/{trial.delay_ms:g}" if trial.perturbed else "none"
+
+
+def _first_reasons(checks: list[tuple[NDArray[np.bool_], str]], n: int) -> list[tuple[str, ...]]:
+    """Per trial, the first failing check's reason (later checks assume the earlier passed)."""
+    log: list[tuple[str, ...]] = [()] * n
+    for mask, reason in checks:
+        for i in np.flatnonzero(mask):
+            log[i] = log[i] or (reason,)
+    return log
+
+
+def _stance_trials(session: Session, settings: WalkingSettings, filters: PlatformFilters) -> Trials:
+    """Walking trials to heel-contact-aligned stance trials, every drop logged with its reason."""
+    info, walking = session.info, session.walking
+    fs = info.sample_rate_hz
+    if not walking:
+        raise SessionFormatError("walking/trials.csv: the session has no walking trials")
+    raw, lengths = stack_recordings(
+        [w.recording for w in walking], ("motor_angle", "ankle_angle", *CHANNELS)
+    )
+    n_base = max(1, round(settings.baseline_ms * fs / 1000.0))
+    zeroed = [0, *range(2, raw.shape[1])]  # motor angle and force channels
+    raw[:, zeroed] -= raw[:, zeroed, :n_base].mean(axis=-1, keepdims=True)
+    motor, channels = raw[:, 0], raw[:, 2:]
+    contact = heel_contact(
+        channels[:, 4:].sum(axis=1),
+        fs,
+        settings.heel_contact_threshold_n,
+        hold_ms=settings.heel_contact_hold_ms,
+    )
+    event = np.maximum(contact, n_base)
+    rows = np.arange(len(walking))
+
+    lp = {"fs": fs, "cutoff_hz": settings.cutoff_hz, "order": settings.filter_order}
+    forces = lowpass(channels, **lp) - filters.predict(motor)
+    load = sagittal_load(resultants(forces, info.force_plate), info.force_plate.anterior_axis)
+    cop0 = _cop_at_contact(channels, event, fs, settings.contact_cop_ms, info.force_plate)
+    cop_defined = np.isfinite(cop0)
+    cop_x = load.cop_x.copy()
+    cop_x[rows, event] = np.where(cop_defined, cop0, 0.0)  # ankle_torque zeroes the COP here
+    load = replace(load, cop_x=cop_x)
+    torque, dx = ankle_torque(
+        load, event, heel_to_ankle_m=info.heel_to_ankle_m, ankle_height_m=info.ankle_height_m
+    )
+    ankle = lowpass(raw[:, 1], **lp)
+    kin = kinematics(ankle - ankle[rows, event][:, None], fs, settings.derivative_window)
+
+    onsets = perturbation_onset(
+        motor, start=event, min_amplitude_rad=settings.onset_min_amplitude_rad
+    )
+    found = np.isfinite(onsets.index)
+    perturbed = np.array([w.perturbed for w in walking])
+    delay = np.array([w.delay_ms for w in walking], dtype=float)
+    sign = np.array([{"dorsi": 1.0, "plantar": -1.0}.get(w.direction, 0.0) for w in walking])
+    onset = np.where(found, onsets.index, event)
+    offset = np.round(onset).astype(np.int64) - event
+    base, thr = f"{settings.baseline_ms:g} ms", f"{settings.heel_contact_threshold_n:g} N"
+    log = _first_reasons(
+        [
+            (lengths <= n_base, f"recording shorter than the {base} baseline"),
+            (contact < 0, f"no heel contact: vertical force never held {thr}"),
+            (contact <= n_base, f"heel contact within the first {base} (no unloaded baseline)"),
+            (~cop_defined, "centre of pressure undefined at heel contact"),
+            (perturbed & np.isnan(delay), "perturbed trial without delay_ms"),
+            (perturbed & ~found, "no perturbation found in the motor angle"),
+            (
+                perturbed & (np.sign(onsets.amplitude) != sign),
+                "motor moved against the manifest direction",
+            ),
+            (perturbed & (onset < event), "perturbation began before heel contact"),
+            (~perturbed & found, "motor angle moved in an unperturbed trial"),
+        ],
+        len(walking),
+    )
+    usable = perturbed & np.array([not r for r in log])
+    span = int(np.max(offset[usable], initial=0)) + _samples(max(settings.windows_ms()), fs)
+    data = np.concatenate(
+        [kin, torque[:, None], dx[:, None], load.grf_z[:, None], motor[:, None]], axis=1
+    )
+    time0 = np.array([w.recording.time_s[0] for w in walking])
+    metadata = {
+        "condition": np.array([_condition(w) for w in walking]),
+        "trial": np.array([w.trial for w in walking]),
+        "delay_ms": delay,
+        "heel_contact_s": time0 + event / fs,
+        "onset_s": np.where(perturbed & found, time0 + onset / fs, np.nan),
+        "onset_ms": np.where(perturbed & found, (onset - event) / fs * 1000.0, np.nan),
+        "offset": offset,
+    }
+    stance = epoch(
+        data,
+        fs,
+        event,
+        0.0,
+        (span - 1) / fs,
+        ch_names=STANCE_CHANNELS,
+        metadata=metadata,
+        lengths=lengths,
+        drop_log=log,
+    )
+    return stance.drop(
+        ~np.isfinite(stance.data).all(axis=(1, 2)),
+        "vertical force below 1 N within the analysed stance (COP undefined)",
+    )
+
+
+def _cop_at_contact(
+    channels: NDArray[np.float64],
+    event: NDArray[np.int64],
+    fs: float,
+    span_ms: float,
+    plate: PlateGeometry,
+) -> NDArray[np.float64]:
+    """COP at heel contact: a line fitted to the raw COP over the first ``span_ms`` of contact.
+
+    The low-pass would smear the force's sudden rise at heel strike over the following samples
+    and move the COP at contact forward; the raw COP is unbiased but noisy at small loads, so
+    the line is weighted by the vertical force squared (the COP's noise falls as 1/Fz).
+    """
+    n = max(2, round(span_ms * fs / 1000.0))
+    index = np.minimum(event[:, None] + np.arange(n), channels.shape[-1] - 1)
+    rows = np.arange(channels.shape[0])[:, None, None]
+    window = channels[rows, np.arange(channels.shape[1])[:, None], index[:, None, :]]
+    load = sagittal_load(resultants(window, plate), plate.anterior_axis)
+    defined = np.isfinite(load.cop_x)
+    weight = np.where(defined, load.grf_z**2, 0.0)
+    cop = np.where(defined, load.cop_x, 0.0)
+    t = np.arange(n, dtype=float)
+    s0, s1, s2 = weight.sum(-1), weight @ t, weight @ t**2
+    c0, c1 = (weight * cop).sum(-1), (weight * cop) @ t
+    with np.errstate(invalid="ignore", divide="ignore"):
+        return (s2 * c0 - s1 * c1) / (s0 * s2 - s1**2)
+
+
+def _samples(ms: float, fs: float) -> int:
+    return max(3, round(ms * fs / 1000.0))
+
+
+def _timing_point(
+    stance: Trials, key: str, settings: WalkingSettings, rng: np.random.Generator
+) -> TimingPoint:
+    """Bootstrap impedance of one condition (``"dorsi/225"``) from the stance trials."""
+    group, unperturbed = stance[key], stance["none"]
+    fs = stance.fs
+    windows = settings.windows_ms()
+    lengths = [_samples(w, fs) for w in windows]
+    onset = group.metadata["offset"]
+    reference = np.maximum(onset - round(settings.offset_reference_ms * fs / 1000.0), 0)
+    index = np.concatenate([reference[:, None], onset[:, None] + np.arange(max(lengths))], axis=1)
+    segment = np.take_along_axis(group.data, index[:, None, :], axis=-1)
+    nominal = unperturbed.average()[:, index].transpose(1, 0, 2)
+    difference = segment[:, :4] - nominal[:, :4]  # angle, velocity, acceleration, torque
+    difference[:, [_ANGLE, _TORQUE]] -= difference[:, [_ANGLE, _TORQUE], :1]
+    response, nominal = difference[..., 1:], nominal[..., 1:]
+    boot = Trials(response, fs, STANCE_CHANNELS[:4]).bootstrap(
+        settings.bootstrap_reps, settings.bootstrap_fraction, random_state=rng
+    )
+    fit = fit_impedance(boot[:, _KIN], boot[:, _TORQUE], lengths=lengths)
+    n = lengths[0]
+    coef = np.stack([fit.stiffness[0], fit.damping[0], fit.inertia[0]], axis=-1)
+    angle = response[:, _ANGLE, :n].mean(axis=0)
+    weight = angle**2
+    return TimingPoint(
+        delay_ms=float(group.metadata["delay_ms"][0]),
+        direction=key.split("/")[0],
+        n_perturbed=len(group),
+        n_unperturbed=len(unperturbed),
+        cop_m=float(weight @ nominal[:, _DX, :n].mean(axis=0) / weight.sum()),
+        stiffness=fit.stiffness[0],
+        damping=fit.damping[0],
+        inertia=fit.inertia[0],
+        vaf=fit.vaf[0],
+        window_stiffness={
+            f"{w:g}": float(np.mean(k)) for w, k in zip(windows[1:], fit.stiffness[1:], strict=True)
+        },
+        onset_ms=group.metadata["onset_ms"],
+        time_s=np.arange(n) / fs,
+        angle=boot[:, _ANGLE, :n],
+        torque=boot[:, _TORQUE, :n],
+        model_torque=np.einsum("ri,rit->rt", coef, boot[:, _KIN, :n]),
+    )
+
+
+def _condition_order(stance: Trials) -> list[str]:
+    keys = [c for c in stance.conditions() if c != "none"]
+    delay = dict(zip(stance.metadata["condition"], stance.metadata["delay_ms"], strict=True))
+    return sorted(keys, key=lambda c: (_DIRECTIONS.index(c.split("/")[0]), delay[c]))
+
+
+def analyze_walking(
+    session: Session,
+    settings: WalkingSettings | None = None,
+    *,
+    filters: PlatformFilters | None = None,
+    progress: Callable[[str], None] | None = None,
+) -> WalkingResults:
+    """Ankle stiffness, damping and inertia per timing point and direction, with bootstrap.
+
+    Parameters
+    ----------
+    session : Session
+        Calibration (unless ``filters`` is given), walking and optionally bench recordings.
+    settings : WalkingSettings, optional
+        Analysis settings; paper 000's defaults when omitted.
+    filters : PlatformFilters, optional
+        Previously fitted platform filters (``anklelab identify platform-filters``); they are
+        then scored on every calibration trial of ``session`` (if it has any).
+    progress : callable, optional
+        Called with each name of :data:`STEPS` as that step starts.
+
+    Returns
+    -------
+    WalkingResults
+    """
+    settings = settings or WalkingSettings()
+    report = progress or (lambda step: None)
+    fs = session.info.sample_rate_hz
+    report(STEPS[0])
+    if filters is None:
+        filters, filter_vaf, filter_vaf_by_channel = fit_platform_filters(session, settings)
+    else:
+        if not np.isclose(filters.fs_, fs) or tuple(filters.channels) != CHANNELS:
+            raise ParameterError(
+                f"filters: fitted at {filters.fs_:g} Hz on channels {filters.channels}; the "
+                f"session is sampled at {fs:g} Hz with channels {CHANNELS}"
+            )
+        filter_vaf, filter_vaf_by_channel = _score_filters(filters, list(session.calibration))
+    report(STEPS[1])
+    stance = _stance_trials(session, settings, filters)
+    if len(stance["none"]) == 0:
+        raise SessionFormatError(
+            "walking/trials.csv: no usable unperturbed trials, so the walking profile cannot be "
+            f"removed; drop reasons: {_drop_summary(stance)}"
+        )
+    report(STEPS[2])
+    rng = np.random.default_rng(settings.seed)
+    points = [_timing_point(stance, key, settings, rng) for key in _condition_order(stance)]
+    report(STEPS[3])
+    return WalkingResults(
+        settings=settings,
+        filters=filters,
+        filter_vaf=filter_vaf,
+        filter_vaf_by_channel=filter_vaf_by_channel,
+        timing_points=points,
+        bench=bench_stiffness(session.bench),
+        stance=stance,
+    )
+
+
+def _drop_summary(trials: Trials) -> str:
+    counts: dict[str, int] = {}
+    for reasons in trials.drop_log:
+        for reason in reasons:
+            counts[reason] = counts.get(reason, 0) + 1
+    return "; ".join(f"{reason} ({n})" for reason, n in counts.items()) or "none"

@@ -1,0 +1,362 @@
+"""Walking impedance pipeline on a hand-made session with known K, B, I (and on the twin).
+
+The hand-made session is built here from first principles, independently of the digital twin:
+a foot whose perturbation torque is ``K θ + B θ' + I θ''`` about the ankle, realised as a shift
+of the centre of pressure under an unchanged vertical force; the plate's own inertial and
+gravity forces on every channel (the same in calibration and walking); channel noise, a noisy
+goniometer and a quantised motor angle; an arbitrary plate geometry and mounting.
+"""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+from scipy.signal import lfilter
+
+from anklelab.data import BenchTest, Recording, Session, SessionInfo, WalkingTrial
+from anklelab.errors import ParameterError, SessionFormatError
+from anklelab.forceplate import CHANNELS, PlateGeometry, channels_from_load
+from anklelab.pipelines import WalkingSettings, analyze_walking
+from anklelab.signals import lowpass
+
+FS = 1000.0
+K, B, INERTIA = 1150.0, 2.0, 0.25
+FINE = 10  # the perturbation template is built on a 10x finer grid for accurate derivatives
+
+
+def _second_order(x, f_hz, zeta, fs):
+    """Unit-gain second-order low-pass, bilinear discretisation."""
+    w, c = 2 * np.pi * f_hz, 2 * fs
+    a0, a1, a2 = (
+        c * c + 2 * zeta * w * c + w * w,
+        2 * w * w - 2 * c * c,
+        c * c - 2 * zeta * w * c + w * w,
+    )
+    return lfilter(np.array([1.0, 2.0, 1.0]) * w * w / a0, [1.0, a1 / a0, a2 / a0], x)
+
+
+def _perturbation(amplitude, n=600):
+    """A 75 ms ramp-and-hold through the servo (200 Hz, zeta 0.4), with two derivatives."""
+    t = np.arange(n * FINE) / (FS * FINE)
+    angle = _second_order(amplitude * np.clip(t / 0.075, 0, 1), 200.0, 0.4, FS * FINE)
+    vel = np.gradient(angle, t)
+    acc = np.gradient(vel, t)
+    # block means: an anti-alias filter that commutes with differentiation (the DAQ's sampling)
+    return tuple(x.reshape(n, FINE).mean(axis=1) for x in (angle, vel, acc))
+
+
+INERTIAL = np.array([0.8, 0.8, 0.1, -0.1, 2.5, 2.5, -2.5, -2.5])  # N per rad/s^2
+GRAVITY = np.array([45.0, 45.0, 0.0, 0.0, 6.0, -6.0, -6.0, 6.0])  # N per rad
+
+
+def _plate_forces(angle):
+    """The unloaded plate's own forces on the 8 channels: ringing inertia plus gravity."""
+    acc = np.gradient(np.gradient(angle, 1 / FS, axis=-1), 1 / FS, axis=-1)
+    ring = _second_order(acc, 60.0, 0.1, FS)
+    return INERTIAL[:, None] * ring[..., None, :] + GRAVITY[:, None] * angle[..., None, :]
+
+
+def _calibration(rng, n=20000):
+    angle, t = np.zeros(n), 300
+    ramp = np.arange(1, 76) / 75
+    while t < n - 500:
+        seg = 0.035 * rng.choice([-1.0, 1.0]) * np.concatenate([ramp, np.ones(100), 1 - ramp])
+        angle[t : t + seg.size] = seg
+        t += seg.size + int(rng.integers(0, 2000))
+    angle = _second_order(angle, 200.0, 0.4, FS)
+    forces = _plate_forces(angle) + rng.normal(0, 0.3, (8, n))
+    return _recording("cal.csv", np.round(angle, 4), forces)
+
+
+def _recording(name, motor, channels, ankle=None):
+    cols = {"time_s": np.arange(motor.size) / FS, "motor_angle": motor}
+    if ankle is not None:
+        cols["ankle_angle"] = ankle
+    cols |= dict(zip(CHANNELS, channels, strict=True))
+    return Recording(name, cols)
+
+
+def _plate_load(grf_x, grf_z, cop_x, geometry):
+    """Lab-frame sagittal load -> plate-frame (force on plate, z down) for any mounting."""
+    axis, sign = geometry.anterior_axis[1], 1.0 if geometry.anterior_axis[0] == "+" else -1.0
+    f_ant, a_ant = -sign * grf_x, sign * cop_x
+    lateral = np.full_like(cop_x, 0.03)
+    zeros = np.zeros_like(grf_z)
+    if axis == "x":
+        return np.stack([f_ant, zeros, grf_z]), np.stack([a_ant, lateral])
+    return np.stack([zeros, f_ant, grf_z]), np.stack([lateral, a_ant])
+
+
+class MiniSession:
+    """A small session with known impedance; ``expected_cop`` holds each condition's lever arm."""
+
+    def __init__(
+        self, geometry, *, n_per_point=16, n_unperturbed=40, delays=(150.0, 300.0), seed=0
+    ):
+        rng = np.random.default_rng(seed)
+        self.geometry = geometry
+        self.heel_to_ankle, self.ankle_height = 0.05, 0.09
+        self.expected_cop: dict[str, float] = {}
+        self.true_onset_ms: dict[str, list[float]] = {}
+        templates = {d: _perturbation(0.035 * s) for d, s in (("dorsi", 1.0), ("plantar", -1.0))}
+        trials = []
+        plan = [
+            (True, d, delay)
+            for delay in delays
+            for d in ("dorsi", "plantar")
+            for _ in range(n_per_point)
+        ]
+        plan += [(False, "none", np.nan)] * n_unperturbed
+        order = rng.permutation(len(plan))
+        self.cop_sum: dict[str, list[float]] = {}
+        for number, i in enumerate(order):
+            perturbed, direction, delay = plan[i]
+            trials.append(self._trial(number, perturbed, direction, delay, templates, rng))
+        self.session = Session(
+            info=SessionInfo(
+                platform="perturberator",
+                sample_rate_hz=FS,
+                subject="mini",
+                force_plate=geometry,
+                ankle_height_m=self.ankle_height,
+                heel_to_ankle_m=self.heel_to_ankle,
+            ),
+            calibration=tuple(_calibration(rng) for _ in range(3)),
+            walking=tuple(trials),
+            bench=tuple(_bench(rng)),
+        )
+
+    def _trial(self, number, perturbed, direction, delay, templates, rng):
+        pre = int(rng.integers(150, 220))
+        stance_ms = 750.0 * rng.uniform(0.98, 1.02)
+        n = pre + int(stance_ms) + 60
+        tau = (np.arange(n) - pre) / FS  # time after contact onset, s
+        on = (tau >= 0) & (tau <= stance_ms / 1000)
+        phase = np.clip(tau / (stance_ms / 1000), 0, 1)
+        grf_z = np.where(on, 720.0 * rng.uniform(0.97, 1.03) * np.sin(np.pi * phase) ** 0.4, 0.0)
+        grf_x = np.where(on, -60.0 * np.sin(2 * np.pi * phase), 0.0)
+        cop_hc = -0.12 + rng.normal(0, 0.005)
+        cop_nominal = cop_hc + 0.24 * phase
+        ankle = 0.15 * np.sin(np.pi * phase) * phase + 0.01 * np.sin(3 * np.pi * phase)
+        motor = np.zeros(n)
+        cop = cop_nominal.copy()
+        if perturbed:
+            key = f"{direction}/{delay:g}"
+            contact = pre + int(np.argmax(grf_z[pre:] >= 25.0))  # the 25 N trigger
+            onset = contact + round(delay + rng.normal(0, 4.0))
+            theta, vel, acc = (np.zeros(n) for _ in range(3))
+            m = min(n - onset, templates[direction][0].size)
+            for arr, tpl in zip((theta, vel, acc), templates[direction], strict=True):
+                arr[onset : onset + m] = tpl[:m]
+                arr[onset + m :] = tpl[m - 1] if arr is theta else 0.0
+            torque = K * theta + B * vel + INERTIA * acc
+            cop = cop_nominal + np.divide(torque, grf_z, out=np.zeros(n), where=grf_z > 1.0)
+            motor, ankle = theta, ankle + theta
+            self.true_onset_ms.setdefault(key, []).append(onset - contact)
+            # the contract's lever arm: nominal dx, theta^2-weighted over the 100 ms window
+            dx_nominal = cop_nominal - cop_hc - self.heel_to_ankle
+            w = theta[onset : onset + 100] ** 2
+            self.cop_sum.setdefault(key, []).append(
+                float(w @ dx_nominal[onset : onset + 100] / w.sum())
+            )
+            self.expected_cop[key] = float(np.mean(self.cop_sum[key]))
+        force, point = _plate_load(grf_x, grf_z, cop, self.geometry)
+        channels = channels_from_load(force, np.nan_to_num(point), self.geometry, axis=0)
+        channels = channels + _plate_forces(motor) + rng.normal(0, 0.5, (8, n))
+        ankle_measured = ankle + rng.normal(0, 1e-3, n)
+        rec = _recording(f"t{number}.csv", np.round(motor, 4), channels, ankle_measured)
+        return WalkingTrial(number, rec, perturbed, direction, delay)
+
+
+BENCH_LAW = {0.06: 1300.0, 0.085: 1137.5, 0.11: 975.0}
+
+
+def _bench(rng):
+    x = np.linspace(0, 0.015, 300)
+    for number, (d, k) in enumerate(list(BENCH_LAW.items()) * 3):
+        force = k * x / d**2 + rng.normal(0, 1.0, x.size)
+        yield BenchTest(
+            number,
+            Recording(f"b{number}.csv", {"time_s": x * 600, "displacement_m": x, "force_n": force}),
+            d,
+        )
+
+
+GEOMETRIES = {
+    "+x": PlateGeometry(a_m=0.12, b_m=0.2, az0_m=-0.045),
+    "-y": PlateGeometry(a_m=0.21, b_m=0.11, az0_m=-0.038, anterior_axis="-y"),
+}
+
+
+@pytest.fixture(scope="module", params=list(GEOMETRIES))
+def mini(request):
+    return MiniSession(GEOMETRIES[request.param], seed=1)
+
+
+@pytest.fixture(scope="module")
+def analysed(mini):
+    return analyze_walking(mini.session, WalkingSettings(bootstrap_reps=60))
+
+
+def _se(values, fraction=0.6):
+    """Standard error of the full-sample estimate from the spread of 60 % subsample means.
+
+    Subsample means (without replacement) scatter with variance s²/m (1 - m/n), the full mean
+    with s²/n: se = sd_boot * sqrt(f / (1 - f)).
+    """
+    return np.std(values, ddof=1) * np.sqrt(fraction / (1 - fraction))
+
+
+def test_recovers_known_impedance_in_both_directions(mini, analysed):
+    points = {tp.key: tp for tp in analysed.timing_points}
+    assert sorted(points) == ["dorsi/150", "dorsi/300", "plantar/150", "plantar/300"]
+    for key, tp in points.items():
+        assert tp.n_perturbed == 16 and tp.n_unperturbed == 40
+        k, b, inertia = (np.mean(v) for v in (tp.stiffness, tp.damping, tp.inertia))
+        # tolerance: 4 standard errors (from the bootstrap spread), plus 1 % of K for the
+        # quadratic-fit derivatives of a 20 Hz low-passed angle
+        assert abs(k - K) < 4 * _se(tp.stiffness) + 0.01 * K, key
+        assert abs(inertia - INERTIA) < 4 * _se(tp.inertia) + 0.01 * INERTIA, key
+        assert abs(b - B) < 4 * _se(tp.damping) + 0.2, key
+        assert np.mean(tp.vaf) > 99.0
+        assert tp.cop_m == pytest.approx(mini.expected_cop[key], abs=1e-3)
+        true = np.sort(mini.true_onset_ms[key])
+        assert np.allclose(np.sort(tp.onset_ms), true, atol=1.5)
+        assert set(tp.window_stiffness) == {"75", "125"}
+
+
+def test_platform_filters_and_drop_log(analysed):
+    assert analysed.filter_vaf.shape == (2,) and np.all(analysed.filter_vaf > 95.0)
+    assert analysed.filter_vaf_by_channel.shape == (2, 8)
+    assert len(analysed.stance) == 104 and not any(analysed.stance.drop_log)
+
+
+def test_results_document_has_exactly_the_contract_keys(analysed):
+    doc = json.loads(json.dumps(analysed.to_dict(session="abc")))
+    assert set(doc) == {
+        "anklelab_version",
+        "session",
+        "settings",
+        "platform_filters",
+        "timing_points",
+        "bench",
+        "validation",
+    }
+    assert set(doc["platform_filters"]) == {
+        "n_lags",
+        "vaf_percent_mean",
+        "vaf_percent_sd",
+        "vaf_percent_by_channel",
+    }
+    assert list(doc["platform_filters"]["vaf_percent_by_channel"]) == list(CHANNELS)
+    point = doc["timing_points"][0]
+    assert set(point) == {
+        "delay_ms",
+        "direction",
+        "n_perturbed",
+        "n_unperturbed",
+        "cop_m",
+        "stiffness_nm_per_rad",
+        "damping_nms_per_rad",
+        "inertia_kgm2",
+        "vaf_percent",
+        "window_sensitivity",
+    }
+    assert set(point["stiffness_nm_per_rad"]) == {"mean", "sd"}
+    assert set(point["window_sensitivity"]["75"]) == {"stiffness_nm_per_rad"}
+    assert [b["distance_m"] for b in doc["bench"]] == [0.06, 0.085, 0.11]
+    assert set(doc["bench"][0]) == {"distance_m", "stiffness_nm_per_rad", "r2", "n_tests"}
+    assert [v["delay_ms"] for v in doc["validation"]] == [150.0, 300.0]  # dorsiflexion only
+    assert set(doc["validation"][0]) == {
+        "delay_ms",
+        "cop_m",
+        "bench_stiffness_nm_per_rad",
+        "error_percent",
+    }
+    assert doc["settings"]["cutoff_hz"] == 20.0 and doc["settings"]["window_ms"] == 100.0
+
+
+def test_validation_error_is_against_the_bench_line_at_cop(analysed):
+    for row, tp in zip(
+        analysed.validation(),
+        [t for t in analysed.timing_points if t.direction == "dorsi"],
+        strict=True,
+    ):
+        bench = 1300.0 - 6500.0 * (row["cop_m"] - 0.06)  # the linear bench law, extended
+        assert row["bench_stiffness_nm_per_rad"] == pytest.approx(bench, rel=2e-3)
+        got = row["bench_stiffness_nm_per_rad"]
+        assert row["error_percent"] == pytest.approx((np.mean(tp.stiffness) - got) / got * 100)
+
+
+def test_same_seed_same_numbers_and_other_seed_differs(mini, analysed):
+    again = analyze_walking(mini.session, WalkingSettings(bootstrap_reps=60))
+    assert np.array_equal(again.timing_points[0].stiffness, analysed.timing_points[0].stiffness)
+    other = analyze_walking(mini.session, WalkingSettings(bootstrap_reps=60, seed=5))
+    assert not np.array_equal(other.timing_points[0].stiffness, analysed.timing_points[0].stiffness)
+
+
+def test_bad_trials_are_dropped_with_reasons():
+    mini = MiniSession(GEOMETRIES["+x"], n_per_point=6, n_unperturbed=12, delays=(200.0,), seed=3)
+    walking = list(mini.session.walking)
+    dorsi = [i for i, w in enumerate(walking) if w.direction == "dorsi"]
+    none = [i for i, w in enumerate(walking) if not w.perturbed]
+
+    def edit(i, **columns):
+        rec = walking[i].recording
+        walking[i] = WalkingTrial(
+            walking[i].trial,
+            Recording(rec.name, {**rec.columns, **columns}),
+            walking[i].perturbed,
+            walking[i].direction,
+            walking[i].delay_ms,
+        )
+
+    edit(dorsi[0], **{c: walking[dorsi[0]].recording[c] * 0.01 for c in CHANNELS})  # no contact
+    edit(dorsi[1], motor_angle=np.zeros(walking[dorsi[1]].recording.n_samples))  # no motion
+    edit(dorsi[2], motor_angle=-walking[dorsi[2]].recording["motor_angle"])  # wrong way
+    edit(
+        none[0],
+        motor_angle=walking[dorsi[3]].recording["motor_angle"][
+            : walking[none[0]].recording.n_samples
+        ],
+    )
+    session = Session(
+        mini.session.info, mini.session.calibration, tuple(walking), mini.session.bench
+    )
+    result = analyze_walking(session, WalkingSettings(bootstrap_reps=20))
+    log = result.stance.drop_log
+    assert log[dorsi[0]] == ("no heel contact: vertical force never held 25 N",)
+    assert log[dorsi[1]] == ("no perturbation found in the motor angle",)
+    assert log[dorsi[2]] == ("motor moved against the manifest direction",)
+    assert log[none[0]] == ("motor angle moved in an unperturbed trial",)
+    assert sum(bool(r) for r in log) == 4
+    points = {tp.key: tp for tp in result.timing_points}
+    assert points["dorsi/200"].n_perturbed == 3 and points["dorsi/200"].n_unperturbed == 11
+
+
+def test_no_unperturbed_trials_is_a_clear_error():
+    mini = MiniSession(GEOMETRIES["+x"], n_per_point=3, n_unperturbed=0, delays=(200.0,), seed=4)
+    with pytest.raises(SessionFormatError, match="no usable unperturbed trials"):
+        analyze_walking(mini.session)
+
+
+def test_settings_are_validated():
+    with pytest.raises(ValueError, match="derivative_window"):
+        WalkingSettings(derivative_window=4)
+    with pytest.raises(ValueError, match="bootstrap_fraction"):
+        WalkingSettings(bootstrap_fraction=1.5)
+    mini = MiniSession(GEOMETRIES["+x"], n_per_point=3, n_unperturbed=6, delays=(200.0,), seed=5)
+    with pytest.raises(ParameterError, match="calibration_fit_trial"):
+        analyze_walking(mini.session, WalkingSettings(calibration_fit_trial=7))
+
+
+def test_low_pass_commutes_so_the_model_holds_after_filtering():
+    """Sanity of the hand-made foot: filtering θ and T alike keeps T = Kθ + Bθ' + Iθ''."""
+    theta, vel, acc = _perturbation(0.035, n=400)
+    torque = K * theta + B * vel + INERTIA * acc
+    pad = lambda x: np.concatenate([np.zeros(100), x])  # noqa: E731
+    tf = lowpass(pad(torque), FS)
+    thf, velf, accf = (lowpass(pad(x), FS) for x in (theta, vel, acc))
+    assert np.allclose(tf, K * thf + B * velf + INERTIA * accf)
