@@ -9,6 +9,8 @@ same way in JSON, HDF5 and TOML and compared exactly:
   lists and tuples of numbers become such arrays, 0-d arrays become scalars,
 - sequences of strings (kept as a tuple of ``str``).
 
+Keys are non-empty strings; no key or text may contain a NUL character (HDF5 cannot store it).
+
 :func:`canonical` converts a tree to this form (dates and times become ISO strings) and raises
 ``ValueError`` naming the key of anything else. JSON files keep arrays as (nested) lists and
 non-finite floats as ``NaN``/``Infinity`` (Python's JSON dialect); HDF5 keeps mappings as
@@ -54,8 +56,8 @@ def canonical(tree: Mapping[str, Any], path: str = "") -> dict[str, Any]:
         raise ValueError(f"{path or 'tree'}: expected a mapping, got {type(tree).__name__}")
     out = {}
     for key, value in tree.items():
-        if not isinstance(key, str):
-            raise ValueError(f"{path}{key!r}: keys must be strings")
+        if not isinstance(key, str) or not key or "\x00" in key:
+            raise ValueError(f"{path}{key!r}: keys must be non-empty strings without NUL")
         out[key] = _value(value, f"{path}{key}")
     return out
 
@@ -63,6 +65,8 @@ def canonical(tree: Mapping[str, Any], path: str = "") -> dict[str, Any]:
 def _value(value: Any, path: str) -> Any:
     if isinstance(value, Mapping):
         return canonical(value, path + ".")
+    if isinstance(value, str) and "\x00" in value:
+        raise ValueError(f"{path}: text with a NUL character cannot be stored")
     if value is None or isinstance(value, bool | str):
         return value
     if isinstance(value, np.bool_):
@@ -75,7 +79,7 @@ def _value(value: Any, path: str) -> Any:
         return value.isoformat()
     if isinstance(value, np.ndarray | Sequence):
         if not isinstance(value, np.ndarray) and value and all(isinstance(v, str) for v in value):
-            return tuple(value)
+            return tuple(_value(v, path) for v in value)
         try:
             array = np.asarray(value)
         except ValueError:
