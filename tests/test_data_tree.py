@@ -58,7 +58,7 @@ toml_leaves = st.one_of(
     st.booleans(),
     st.integers(-(2**62), 2**62),
     floats,
-    st.text(),
+    text,
     arrays(np.float64, st.integers(1, 4), elements=st.floats(allow_nan=False)),
 )
 toml_trees = st.recursive(
