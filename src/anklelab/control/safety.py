@@ -106,6 +106,7 @@ class SafetyLimits(Parameters):
         )
 
 
+@njit(cache=True)
 def new_safety_state() -> NDArray[np.float64]:
     """A fresh monitor state: ``[latched fault, last counter, ticks without a new sample]``."""
     return np.array([0.0, -1.0, 0.0])
