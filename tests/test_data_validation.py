@@ -110,6 +110,11 @@ CASES = [
         r"trial_0002\.csv: column 'time_s': median time step 1 s .*is time in ms\?",
     ),
     (
+        "semicolons",
+        lambda d: (d / TRIAL).write_text((d / TRIAL).read_text().replace(",", ";")),
+        r"trial_0002\.csv: header \(line 1\) 'time_s;motor_angle.*' is not comma-separated",
+    ),
+    (
         "unnamed column",
         lambda d: replace(d / TRIAL, "fz4", "fz4,"),
         r"trial_0002\.csv: column 12 of the header \(line 1\) has no name",

@@ -93,6 +93,11 @@ def _header(path: Path, text: str, required: tuple[str, ...]) -> list[str]:
             f"{', '.join(required)}"
         )
     names = [name.strip() for name in next(csv.reader([first]))]
+    if len(names) == 1 and any(sep in first for sep in ";\t"):
+        raise SessionFormatError(
+            f"{path}: header (line 1) {first.strip()!r} is not comma-separated; expected the "
+            f"columns {', '.join(required)} separated by commas"
+        )
     if "" in names:
         raise SessionFormatError(
             f"{path}: column {names.index('') + 1} of the header (line 1) has no name; expected "
