@@ -58,7 +58,7 @@ def _plate_forces(angle):
     return INERTIAL[:, None] * ring[..., None, :] + GRAVITY[:, None] * angle[..., None, :]
 
 
-def _calibration(rng, n=20000):
+def _calibration(rng, number, n=20000):
     angle, t = np.zeros(n), 300
     ramp = np.arange(1, 76) / 75
     while t < n - 500:
@@ -67,7 +67,7 @@ def _calibration(rng, n=20000):
         t += seg.size + int(rng.integers(0, 2000))
     angle = _second_order(angle, 200.0, 0.4, FS)
     forces = _plate_forces(angle) + rng.normal(0, 0.3, (8, n))
-    return _recording("cal.csv", np.round(angle, 4), forces)
+    return _recording(f"cal{number}.csv", np.round(angle, 4), forces)
 
 
 def _recording(name, motor, channels, ankle=None):
@@ -123,7 +123,7 @@ class MiniSession:
                 ankle_height_m=self.ankle_height,
                 heel_to_ankle_m=self.heel_to_ankle,
             ),
-            calibration=tuple(_calibration(rng) for _ in range(3)),
+            calibration=tuple(_calibration(rng, i) for i in range(3)),
             walking=tuple(trials),
             bench=tuple(_bench(rng)),
         )
@@ -174,12 +174,15 @@ BENCH_LAW = {0.06: 1300.0, 0.085: 1137.5, 0.11: 975.0}
 
 
 def _bench(rng):
-    x = np.linspace(0, 0.015, 300)
+    x = np.linspace(0, 0.015, 1500)  # 1.5 cm in 1.5 s at the session's sample rate
     for number, (d, k) in enumerate(list(BENCH_LAW.items()) * 3):
         force = k * x / d**2 + rng.normal(0, 1.0, x.size)
         yield BenchTest(
             number,
-            Recording(f"b{number}.csv", {"time_s": x * 600, "displacement_m": x, "force_n": force}),
+            Recording(
+                f"b{number}.csv",
+                {"time_s": np.arange(x.size) / FS, "displacement_m": x, "force_n": force},
+            ),
             d,
         )
 
@@ -360,3 +363,68 @@ def test_low_pass_commutes_so_the_model_holds_after_filtering():
     tf = lowpass(pad(torque), FS)
     thf, velf, accf = (lowpass(pad(x), FS) for x in (theta, vel, acc))
     assert np.allclose(tf, K * thf + B * velf + INERTIA * accf)
+
+
+def test_cli_identify_then_analyze_writes_results_table_and_figures(tmp_path):
+    from typer.testing import CliRunner
+
+    from anklelab.cli import app
+    from anklelab.data import save_session, session_hash
+
+    mini = MiniSession(GEOMETRIES["-y"], n_per_point=5, n_unperturbed=10, delays=(200.0,), seed=6)
+    path = save_session(mini.session, tmp_path / "s.h5")
+    runner = CliRunner()
+    filters = tmp_path / "filters.json"
+    result = runner.invoke(app, ["identify", "platform-filters", str(path), "--out", str(filters)])
+    assert result.exit_code == 0, result.output
+    assert "held-out VAF" in result.output and filters.is_file()
+    settings = tmp_path / "settings.toml"
+    settings.write_text("bootstrap_reps = 30\nwindow_ms = 90\n")
+    out = tmp_path / "out"
+    args = [
+        "analyze",
+        str(path),
+        "--out",
+        str(out),
+        "--filters",
+        str(filters),
+        "--settings",
+        str(settings),
+    ]
+    result = runner.invoke(app, args)
+    assert result.exit_code == 0, result.output
+    doc = json.loads((out / "results.json").read_text())
+    assert doc["session"] == session_hash(path)
+    assert doc["settings"]["bootstrap_reps"] == 30 and doc["settings"]["window_ms"] == 90.0
+    assert len(doc["timing_points"]) == 2 and doc["platform_filters"]["vaf_percent_mean"] > 95.0
+    rows = (out / "results.csv").read_text().splitlines()
+    assert rows[0].startswith("delay_ms,direction,n_perturbed") and len(rows) == 3
+    trials = (out / "trials.csv").read_text().splitlines()
+    assert len(trials) == 1 + len(mini.session.walking)
+    for name in ("filters", "stance_profiles", "model_fit", "stiffness_vs_lever_arm"):
+        assert (out / f"{name}.png").read_bytes()[:4] == b"\x89PNG"
+
+
+def test_cli_bad_settings_file_names_the_key(tmp_path):
+    import subprocess
+    import sys
+
+    settings = tmp_path / "settings.toml"
+    settings.write_text("bootstrap_rep = 30\n")
+    proc = subprocess.run(
+        [
+            sys.executable,
+            "-c",
+            "from anklelab.cli import run; run()",
+            "analyze",
+            str(tmp_path),
+            "--out",
+            str(tmp_path / "o"),
+            "--settings",
+            str(settings),
+        ],
+        capture_output=True,
+        text=True,
+    )
+    assert proc.returncode == 2
+    assert "bootstrap_rep" in proc.stderr and "did you mean 'bootstrap_reps'" in proc.stderr

@@ -7,7 +7,7 @@ from typing import Annotated
 import typer
 
 from anklelab import __version__
-from anklelab.commands import importer, platform, session
+from anklelab.commands import analyze, identify, importer, platform, session
 from anklelab.errors import AnklelabError
 
 app = typer.Typer(
@@ -19,6 +19,8 @@ app = typer.Typer(
 app.add_typer(platform.app, name="platform")
 app.add_typer(session.app, name="session")
 app.command("import")(importer.import_session)
+app.command("analyze")(analyze.analyze)
+app.add_typer(identify.app, name="identify")
 
 
 def _version(value: bool) -> None:

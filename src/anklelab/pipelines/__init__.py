@@ -8,6 +8,7 @@ from anklelab.pipelines.walking import (
     WalkingSettings,
     analyze_walking,
     fit_platform_filters,
+    load_walking_settings,
 )
 
 __all__ = [
@@ -18,4 +19,5 @@ __all__ = [
     "WalkingSettings",
     "analyze_walking",
     "fit_platform_filters",
+    "load_walking_settings",
 ]

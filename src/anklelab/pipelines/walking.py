@@ -27,13 +27,14 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass, replace
+from pathlib import Path
 from typing import Any, Literal
 
 import numpy as np
 from numpy.typing import NDArray
 from pydantic import Field, model_validator
 
-from anklelab._params import Parameters
+from anklelab._params import Parameters, load_parameters
 from anklelab._version import __version__
 from anklelab.data.session import Session, WalkingTrial
 from anklelab.errors import ParameterError, SessionFormatError
@@ -65,6 +66,7 @@ __all__ = [
     "WalkingSettings",
     "analyze_walking",
     "fit_platform_filters",
+    "load_walking_settings",
 ]
 
 STEPS = ("platform filters", "walking trials", "ensembles and bootstrap", "bench")
@@ -150,6 +152,17 @@ class WalkingSettings(Parameters):
     def windows_ms(self) -> tuple[float, ...]:
         """The analysis window followed by the sensitivity windows, ms."""
         return (self.window_ms, *(w for w in self.sensitivity_windows_ms if w != self.window_ms))
+
+
+def load_walking_settings(path: str | Path | None = None, **overrides: Any) -> WalkingSettings:
+    """Settings from a TOML file of :class:`WalkingSettings` keys (defaults if no file).
+
+    Keyword arguments that are not ``None`` override the file; every value is validated and an
+    error names the file and the key.
+    """
+    settings = load_parameters(WalkingSettings, path) if path else WalkingSettings()
+    changes = {key: value for key, value in overrides.items() if value is not None}
+    return settings.replace(changes) if changes else settings
 
 
 @dataclass(frozen=True)
@@ -248,7 +261,8 @@ class WalkingResults:
 
     def to_dict(self, session: str) -> dict[str, Any]:
         """The ``results.json`` document (DESIGN.md section 5), ``session`` naming the input."""
-        by_channel = self.filter_vaf_by_channel.mean(axis=0)
+        scored = self.filter_vaf.size > 0
+        by_channel = self.filter_vaf_by_channel.mean(axis=0) if scored else []
         return _finite(
             {
                 "anklelab_version": __version__,
@@ -256,10 +270,10 @@ class WalkingResults:
                 "settings": self.settings.model_dump(mode="json"),
                 "platform_filters": {
                     "n_lags": int(self.filters.n_lags),
-                    "vaf_percent_mean": float(np.mean(self.filter_vaf)),
-                    "vaf_percent_sd": _sd(self.filter_vaf),
+                    "vaf_percent_mean": float(np.mean(self.filter_vaf)) if scored else None,
+                    "vaf_percent_sd": _sd(self.filter_vaf) if scored else None,
                     "vaf_percent_by_channel": dict(
-                        zip(self.filters.channels, map(float, by_channel), strict=True)
+                        zip(self.filters.channels, map(float, by_channel), strict=False)
                     ),
                 },
                 "timing_points": [
@@ -384,7 +398,8 @@ def _score_filters(
     filters: PlatformFilters, recordings: list[Any]
 ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     scores = [filters.vaf(rec["motor_angle"], rec.stack(CHANNELS)) for rec in recordings]
-    return np.array([s[0] for s in scores]), np.array([s[1] for s in scores])
+    pooled = np.array([s[0] for s in scores])
+    return pooled, np.array([s[1] for s in scores]).reshape(len(scores), len(filters.channels))
 
 
 def _condition(trial: WalkingTrial) -> str:

@@ -1,0 +1,151 @@
+"""``anklelab analyze``: walking impedance from a session (paper 000), results and figures."""
+
+from __future__ import annotations
+
+import csv
+import io
+import json
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Annotated, Any
+
+import numpy as np
+import typer
+from rich.console import Console
+from rich.table import Table
+
+from anklelab._atomic import write_text_atomic
+from anklelab.commands._progress import recording_progress
+from anklelab.data import load_session, session_hash
+from anklelab.data.session import Session
+from anklelab.ident.irf import PlatformFilters
+from anklelab.pipelines.walking import (
+    STEPS,
+    WalkingResults,
+    analyze_walking,
+    load_walking_settings,
+)
+
+__all__ = ["analyze", "trials_table", "write_csv"]
+
+
+def write_csv(path: Path, rows: Sequence[dict[str, Any]]) -> Path:
+    """Write dict rows (same keys) as CSV, atomically; ``None`` becomes an empty cell."""
+    buffer = io.StringIO()
+    writer = csv.DictWriter(buffer, fieldnames=list(rows[0]) if rows else [], lineterminator="\n")
+    writer.writeheader()
+    writer.writerows(rows)
+    return write_text_atomic(path, buffer.getvalue())
+
+
+def trials_table(session: Session, results: WalkingResults) -> list[dict[str, Any]]:
+    """One row per walking trial: what was detected and, if it was dropped, why."""
+    stance = results.stance
+    position = {int(p): i for i, p in enumerate(stance.selection)}
+    rows = []
+    for p, (trial, reasons) in enumerate(zip(session.walking, stance.drop_log, strict=True)):
+        i = position.get(p)
+        meta = (
+            {k: stance.metadata[k][i] for k in ("heel_contact_s", "onset_s", "onset_ms")}
+            if i is not None
+            else {}
+        )
+        rows.append(
+            {
+                "trial": trial.trial,
+                "file": trial.recording.name,
+                "perturbed": int(trial.perturbed),
+                "direction": trial.direction,
+                "delay_ms": None if np.isnan(trial.delay_ms) else trial.delay_ms,
+                "kept": int(not reasons),
+                "heel_contact_s": meta.get("heel_contact_s"),
+                "onset_s": None if i is None or np.isnan(meta["onset_s"]) else meta["onset_s"],
+                "onset_ms": None if i is None or np.isnan(meta["onset_ms"]) else meta["onset_ms"],
+                "drop_reason": "; ".join(reasons),
+            }
+        )
+    return rows
+
+
+def _summary(results: WalkingResults) -> Table:
+    table = Table(title="walking impedance (bootstrap mean ± sd)")
+    for column in (
+        "condition",
+        "n",
+        "cop (cm)",
+        "k (N·m/rad)",
+        "b (N·m·s/rad)",
+        "I (kg·m²)",
+        "VAF %",
+    ):
+        table.add_column(column, justify="right")
+    for tp in results.timing_points:
+        table.add_row(
+            tp.key,
+            str(tp.n_perturbed),
+            f"{tp.cop_m * 100:.2f}",
+            *(
+                f"{np.mean(v):.4g} ± {np.std(v, ddof=1) if v.size > 1 else 0.0:.2g}"
+                for v in (tp.stiffness, tp.damping, tp.inertia, tp.vaf)
+            ),
+        )
+    return table
+
+
+def analyze(
+    session_path: Annotated[
+        Path, typer.Argument(metavar="SESSION", help="Session directory, .h5 or .mat file.")
+    ],
+    out: Annotated[Path, typer.Option("--out", "-o", help="Directory for results and figures.")],
+    settings_file: Annotated[
+        Path | None,
+        typer.Option("--settings", help="TOML file of analysis settings (WalkingSettings keys)."),
+    ] = None,
+    filters_file: Annotated[
+        Path | None,
+        typer.Option(
+            "--filters", help="Platform filters from `anklelab identify platform-filters`."
+        ),
+    ] = None,
+    seed: Annotated[
+        int | None, typer.Option(help="Bootstrap seed (overrides the settings).")
+    ] = None,
+    figures: Annotated[
+        bool, typer.Option("--figures/--no-figures", help="Write PNG figures.")
+    ] = True,
+) -> None:
+    """Ankle stiffness, damping and inertia per timing point and direction, with bootstrap.
+
+    Writes OUT/results.json (DESIGN.md section 5), OUT/results.csv (one row per timing point and
+    direction), OUT/trials.csv (detections and drop reasons per trial) and OUT/*.png figures.
+    """
+    settings = load_walking_settings(settings_file, seed=seed)
+    filters = PlatformFilters.load(filters_file) if filters_file else None
+    with recording_progress() as task:
+        session = load_session(session_path, progress=task(f"reading {session_path.name}"))
+        step = task("analysing")
+        total = len(STEPS) + 1 + figures
+        names = list(STEPS)
+        results = analyze_walking(
+            session, settings, filters=filters, progress=lambda name: step(names.index(name), total)
+        )
+        step(len(STEPS), total)
+        out.mkdir(parents=True, exist_ok=True)
+        document = results.to_dict(session=session_hash(session_path))
+        write_text_atomic(out / "results.json", json.dumps(document, indent=2))
+        write_csv(out / "results.csv", results.table())
+        write_csv(out / "trials.csv", trials_table(session, results))
+        if figures:
+            from anklelab.report.figures_walking import save_walking_figures
+
+            save_walking_figures(results, out)
+        step(total, total)
+    console = Console()
+    console.print(_summary(results))
+    dropped = sum(1 for reasons in results.stance.drop_log if reasons)
+    vaf = document["platform_filters"]["vaf_percent_mean"]
+    console.print(
+        f"platform filters: held-out VAF {'-' if vaf is None else f'{vaf:.2f}'} %; "
+        f"{dropped} of {len(session.walking)} walking trials dropped (see trials.csv); "
+        f"results in {out}"
+    )
