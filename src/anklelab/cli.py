@@ -7,7 +7,7 @@ from typing import Annotated
 import typer
 
 from anklelab import __version__
-from anklelab.commands import analyze, identify, importer, platform, session
+from anklelab.commands import analyze, capstan, identify, importer, platform, session, simulate
 from anklelab.errors import AnklelabError
 
 app = typer.Typer(
@@ -21,6 +21,8 @@ app.add_typer(session.app, name="session")
 app.command("import")(importer.import_session)
 app.command("analyze")(analyze.analyze)
 app.add_typer(identify.app, name="identify")
+app.add_typer(simulate.app, name="simulate")
+app.add_typer(capstan.app, name="capstan")
 
 
 def _version(value: bool) -> None:
@@ -50,9 +52,9 @@ def demo() -> None:
 
 
 def run() -> None:
-    """Entry point: turn anklelab's domain errors into a one-line message and exit code 2."""
+    """Entry point: typer reports usage errors; domain errors become one line and exit code 2."""
     try:
-        app(standalone_mode=False)
+        app()
     except AnklelabError as exc:
         typer.echo(f"error: {exc}", err=True)
         raise SystemExit(2) from None

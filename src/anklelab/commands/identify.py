@@ -74,3 +74,80 @@ def platform_filters(
     console = Console()
     console.print(table)
     console.print(f"mean held-out VAF {np.mean(vaf):.2f} %; filters written to {out}")
+
+
+@app.command("friction")
+def friction(
+    ident_dir: Annotated[
+        Path, typer.Argument(metavar="DIR", help="Capstan identification directory.")
+    ],
+    out: Annotated[Path, typer.Option("--out", "-o", help="Output directory.")],
+    min_speed: Annotated[
+        float, typer.Option(help="Fit spin-downs with the exact solution above this speed, rad/s.")
+    ] = 10.0,
+    stribeck_exponent: Annotated[
+        float, typer.Option(help="Exponent of the Stribeck decay (assumed, not fitted).")
+    ] = 2.0,
+    zero_torque: Annotated[
+        float, typer.Option(help="|torque| (N·m) at or below which a spin-down is coasting.")
+    ] = 0.0,
+    figures: Annotated[bool, typer.Option(help="Write the fit figures.")] = True,
+) -> None:
+    """Identify the capstan pinion's inertia and friction (paper 001, Table 2).
+
+    Reads DIR (DESIGN.md section 6: spin-downs and an open-loop torque chirp), writes
+    OUT/friction.json and, with --figures, the spin-down, chirp and friction-map plots.
+    """
+    import json
+
+    from anklelab.data._atomic import atomic_file
+    from anklelab.experiments.capstan_ident import read_ident_directory
+    from anklelab.ident.friction import FrictionIdentifier
+
+    with recording_progress() as task:
+        progress = task(f"reading {ident_dir.name}")
+        data = read_ident_directory(ident_dir)
+        progress(1, 2)
+        model = FrictionIdentifier(
+            min_speed_rad_s=min_speed,
+            stribeck_exponent=stribeck_exponent,
+            zero_torque_nm=zero_torque,
+        ).fit(data)
+        progress(2, 2)
+    result = model.to_dict()
+    out.mkdir(parents=True, exist_ok=True)
+    with atomic_file(out / "friction.json") as tmp:
+        tmp.write_text(json.dumps(result, indent=2) + "\n")
+    if figures:
+        from anklelab.report.figures_capstan import friction_figures
+
+        friction_figures(model, data, out)
+    table = Table(title=f"pinion-shaft friction and inertia from {ident_dir}")
+    for column in ("parameter", "identified", *(("truth", "error %") if data.truth else ())):
+        table.add_column(column, justify="right" if column != "parameter" else "left")
+    flat = _leaves(result)
+    truth = _leaves(data.truth) if data.truth else {}
+    for key, value in flat.items():
+        if key.startswith("fit."):
+            continue
+        cells = [key, f"{value:.5g}"]
+        if data.truth and key in truth:
+            cells += [f"{truth[key]:.5g}", f"{100 * (value - truth[key]) / truth[key]:+.2f}"]
+        table.add_row(*cells)
+    console = Console()
+    console.print(table)
+    console.print(
+        f"spin-down VAF {model.spindown_vaf_percent_:.2f} %, chirp VAF "
+        f"{model.chirp_vaf_percent_:.2f} %; written to {out / 'friction.json'}"
+    )
+
+
+def _leaves(tree: dict, prefix: str = "") -> dict[str, float]:
+    out: dict[str, float] = {}
+    for key, value in tree.items():
+        name = f"{prefix}{key}"
+        if isinstance(value, dict):
+            out |= _leaves(value, f"{name}.")
+        else:
+            out[name] = value
+    return out

@@ -77,8 +77,10 @@ def design_critically_damped(
     The PD part places both closed-loop poles at ``-w0`` for the lumped platform
     ``J s^2 + b s`` (gravity assumed compensated): ``Kp = J w0^2``, ``Kd = 2 J w0 - b``, with
     ``w0 = 5.83 / settling_time_s`` (2 % settling of a critically damped pair). The integral
-    gain ``Ki = integral_fraction * J w0^3`` adds a slow pole near ``-integral_fraction * w0``
-    that only removes steady-state error.
+    gain ``Ki = integral_fraction * J w0^3`` then moves the poles to ``w0`` times the roots of
+    ``x^3 + 2 x^2 + x + integral_fraction`` (for 0.2: -1.38 and -0.31 ± 0.22j); because the
+    integrated error is saturated (``integral_error_limit_rad``), the integral acts near the
+    set-point only and removes the offset left by friction and the user's ankle.
 
     Parameters
     ----------

@@ -75,7 +75,7 @@ def closed_loop(  # type: ignore[no-untyped-def]
 ):
     """Run ``len(reference)`` ticks; returns an array ``(n, len(SIGNALS))``.
 
-    ``reference`` is the angle reference (mode ``position``; NaN switches the motor off for that
+    ``reference`` is the angle reference (mode ``position``; NaN disables the drive for that
     tick), or the environment's equilibrium angle (``admittance``, ``impedance``); ``command`` is
     the current (mode ``open-loop``).
     """
@@ -117,7 +117,8 @@ def closed_loop(  # type: ignore[no-untyped-def]
         request, speed = position_control_update(
             ctrl, ctrl_state, ref if np.isfinite(ref) else angle, ref_speed, angle, dt
         )
-        if mode == 0 and not np.isfinite(reference[k]):
+        disabled = mode == 0 and not np.isfinite(reference[k])
+        if disabled:  # the drive's output stage is off: no current, no current noise
             request = 0.0
         elif mode == 2:
             request += impedance_torque(env, angle, speed, reference[k]) / ctrl.torque_per_amp
@@ -128,7 +129,7 @@ def closed_loop(  # type: ignore[no-untyped-def]
         if mode == 1:
             admittance_update(env, virtual, estimate, reference[k], dt)
         interaction, friction, voltage = plant_advance(
-            plant, law, x, applied, current_noise[k], voluntary[k], n_sub, h
+            plant, law, x, applied, 0.0 if disabled else current_noise[k], voluntary[k], n_sub, h
         )
         row = out[k]
         row[0] = ref

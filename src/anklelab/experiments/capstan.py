@@ -98,6 +98,11 @@ class CapstanSetup:
         The controller's and observer's friction/inertia model (e.g. identified); None: truth.
     observer_cutoff_hz : float
         Disturbance-observer Q-filter cut-off, Hz.
+    coupled : bool
+        False disconnects the cable: the motor, gearhead and pinion turn alone (the
+        identification rig); angles are then the pinion's divided by the capstan ratio.
+    safety : SafetyLimits or None
+        Safety limits (angle, speed, current); None takes them from ``params.safety``.
     max_step_s : float
         Longest physics sub-step, s.
     """
@@ -110,6 +115,8 @@ class CapstanSetup:
     friction_compensation: float = 0.0
     model_friction: FrictionParameters | None = None
     observer_cutoff_hz: float = 20.0
+    coupled: bool = True
+    safety: SafetyLimits | None = None
     max_step_s: float = 1e-4
 
     def resolved_gains(self) -> PIDGains:
@@ -119,10 +126,12 @@ class CapstanSetup:
     def twin(self) -> CapstanTwin:
         """The plant."""
         user = self.params.user if self.with_user else None
-        return CapstanTwin(self.params, user, max_step_s=self.max_step_s)
+        return CapstanTwin(self.params, user, coupled=self.coupled, max_step_s=self.max_step_s)
 
     def safety_limits(self) -> SafetyLimits:
-        """Safety limits from ``params.safety`` (angle, speed, current)."""
+        """The safety limits in force: ``safety``, or those of ``params.safety``."""
+        if self.safety is not None:
+            return self.safety
         s = self.params.safety
         return SafetyLimits(
             position_min=-s.angle_limit_rad,

@@ -1,6 +1,7 @@
 """Estimators: impulse-response filters, 2nd-order impedance, bench stiffness."""
 
 from anklelab.ident.bench import BenchStiffness, bench_stiffness, interpolate_stiffness
+from anklelab.ident.friction import FrictionIdentifier, SpindownFit, read_friction_json
 from anklelab.ident.impedance import ImpedanceFit, ImpedanceModel, fit_impedance
 from anklelab.ident.irf import FILTERS_FORMAT, INPUTS, ImpulseResponse, PlatformFilters
 
@@ -8,11 +9,14 @@ __all__ = [
     "FILTERS_FORMAT",
     "INPUTS",
     "BenchStiffness",
+    "FrictionIdentifier",
     "ImpedanceFit",
     "ImpedanceModel",
     "ImpulseResponse",
     "PlatformFilters",
+    "SpindownFit",
     "bench_stiffness",
     "fit_impedance",
     "interpolate_stiffness",
+    "read_friction_json",
 ]

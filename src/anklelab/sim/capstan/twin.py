@@ -78,11 +78,12 @@ class CapstanTwin:
         """State holding the platform still at ``angle`` with the current that balances it.
 
         The cable stretch carries gravity and the ankle's passive torque; the motor current
-        supplies exactly that torque, so nothing moves at ``t = 0``.
+        supplies exactly that torque, so nothing moves at ``t = 0``. With the cable disconnected
+        the pinion simply rests at ``angle`` times the capstan ratio.
         """
         c = self.constants
-        if not self.coupled:
-            return np.zeros(len(STATE_NAMES))
+        if not self.coupled:  # the pinion alone, at the referred angle
+            return np.array([0.0, angle * c.pulley_radius / c.pinion_radius, 0.0, angle, 0.0])
         load = float(self.gravity_torque(angle)) + c.ankle_stiffness * (angle - c.rest_angle)
         stretch = load / (c.pulley_radius * (c.k_cable + c.k_spring_strand))
         pinion = (c.pulley_radius * angle + stretch) / c.pinion_radius
