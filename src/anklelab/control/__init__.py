@@ -6,11 +6,13 @@ from anklelab.control.haptics import (
     admittance_update,
     impedance_torque,
 )
+from anklelab.control.motion_plan import StepDirectionPlan
 from anklelab.control.observer import (
     DisturbanceObserver,
     observer_constants,
     observer_update,
 )
+from anklelab.control.perturbation import RampHold, calibration_schedule
 from anklelab.control.pid import (
     PIDGains,
     PositionController,
@@ -25,23 +27,45 @@ from anklelab.control.safety import (
     new_safety_state,
     safety_update,
 )
+from anklelab.control.servo import (
+    CascadeGains,
+    LoopMargins,
+    bandwidth_hz,
+    fit_second_order,
+    loop_margins,
+    periodic_frf,
+    prbs,
+)
+from anklelab.control.trigger import onset_updates, trigger_updates
 
 __all__ = [
+    "CascadeGains",
     "DisturbanceObserver",
     "Fault",
+    "LoopMargins",
     "PIDGains",
     "PositionController",
+    "RampHold",
     "SafetyLimits",
     "SafetyMonitor",
+    "StepDirectionPlan",
     "TerrainProfile",
     "VirtualEnvironment",
     "admittance_update",
+    "bandwidth_hz",
+    "calibration_schedule",
     "control_constants",
     "design_critically_damped",
+    "fit_second_order",
     "impedance_torque",
+    "loop_margins",
     "new_safety_state",
     "observer_constants",
     "observer_update",
+    "onset_updates",
+    "periodic_frf",
     "position_control_update",
+    "prbs",
     "safety_update",
+    "trigger_updates",
 ]

@@ -9,6 +9,7 @@ from anklelab.experiments.capstan import (
     simulate_closed_loop,
     step_response,
 )
+from anklelab.experiments.perturberator import simulate_perturberator
 
 __all__ = [
     "CapstanSetup",
@@ -17,5 +18,6 @@ __all__ = [
     "observer_trial",
     "render",
     "simulate_closed_loop",
+    "simulate_perturberator",
     "step_response",
 ]

@@ -1,13 +1,18 @@
 """Parameter objects of the Perturberator walking-perturbation platform (paper 000).
 
-Each class mirrors one table of ``perturberator.toml``; field names carry SI units.
+Each class mirrors one table of ``perturberator.toml``; field names carry SI units. Angles and
+torques of the drivetrain are referred to the platform output (the hinge) unless a name says
+``motor``.
 """
 
 from __future__ import annotations
 
-from pydantic import Field
+import itertools
+
+from pydantic import Field, model_validator
 
 from anklelab._params import Parameters
+from anklelab.errors import ParameterError
 from anklelab.forceplate import PlateGeometry
 
 __all__ = [
@@ -15,17 +20,45 @@ __all__ = [
     "CalibrationProtocol",
     "DaqParameters",
     "ForcePlateParameters",
+    "GaitParameters",
     "GoniometerParameters",
+    "HingeParameters",
+    "HumanAnkleParameters",
     "MotionPlanParameters",
+    "MotorParameters",
     "PerturberatorParameters",
+    "ProstheticFootParameters",
     "ServoParameters",
     "SubjectGeometry",
     "TransmissionParameters",
+    "TriggerParameters",
     "WalkingProtocol",
 ]
 
 Positive = Field(gt=0)
 NonNegative = Field(ge=0)
+Fraction = Field(ge=0, lt=1)
+
+
+def _same_length(owner: str, **arrays: tuple[float, ...]) -> None:
+    lengths = {name: len(values) for name, values in arrays.items()}
+    if len(set(lengths.values())) > 1:
+        listed = ", ".join(f"{owner}.{k} ({n})" for k, n in lengths.items())
+        raise ParameterError(f"{listed}: expected arrays of equal length")
+
+
+def _increasing(owner: str, name: str, values: tuple[float, ...]) -> None:
+    if any(b <= a for a, b in itertools.pairwise(values)):
+        raise ParameterError(f"{owner}.{name}: expected strictly increasing values; got {values}")
+
+
+class MotorParameters(Parameters):
+    """Brushless servo motor (Kollmorgen AKM42H class) and its drive's current limit."""
+
+    rotor_inertia_kgm2: float = Positive
+    gearhead_input_inertia_kgm2: float = NonNegative
+    torque_constant_nm_per_a: float = Positive
+    peak_current_a: float = Positive
 
 
 class TransmissionParameters(Parameters):
@@ -35,10 +68,24 @@ class TransmissionParameters(Parameters):
     peak_output_torque_nm: float = Positive
     coupler_rated_torque_nm: float = Positive
     series_stiffness_nm_per_rad: float = Positive
+    series_damping_nms_per_rad: float = NonNegative
+    viscous_nms_per_rad: float = NonNegative
+    coulomb_nm: float = NonNegative
+    coulomb_smoothing_rad_per_s: float = Positive
+
+
+class HingeParameters(Parameters):
+    """Hinge structure carrying the force plate, rotating about the (ankle-height) hinge axis."""
+
+    inertia_kgm2: float = Positive
+    viscous_nms_per_rad: float = NonNegative
+    gravity_stiffness_nm_per_rad: float = NonNegative
+    axis_anterior_m: float
+    angle_limit_rad: float = Positive
 
 
 class ServoParameters(Parameters):
-    """Servo drive loop rates and the closed-loop targets reported for the autotune."""
+    """Servo drive: loop rates, cascade gains and the closed-loop figures of the autotune."""
 
     position_loop_rate_hz: float = Positive
     velocity_loop_rate_hz: float = Positive
@@ -48,6 +95,10 @@ class ServoParameters(Parameters):
     phase_margin_deg: float = Field(gt=0, lt=180)
     encoder_resolution_rad: float = Positive
     analog_output_resolution_rad: float = Positive
+    position_gain_per_s: float = Positive
+    velocity_gain_nms_per_rad: float = Positive
+    velocity_integral_hz: float = NonNegative
+    current_bandwidth_hz: float = Positive
 
 
 class MotionPlanParameters(Parameters):
@@ -58,19 +109,29 @@ class MotionPlanParameters(Parameters):
 
 
 class ForcePlateParameters(PlateGeometry):
-    """The 8-channel force plate on the hinge: geometry plus dynamics and drift."""
+    """The 8-channel force plate on the hinge: geometry, top-plate body, modes, drift, noise."""
 
     vertical_natural_frequency_hz: float = Positive
     horizontal_natural_frequency_hz: float = Positive
+    damping_ratio: float = Field(gt=0, lt=1)
     drift_n_per_s: float = NonNegative
+    noise_n: float = NonNegative
+    top_plate_mass_kg: float = Positive
+    top_plate_inertia_kgm2: float = Positive
+    top_plate_com_z_m: float = Field(lt=0)
+    range_vertical_n: float = Positive
+    range_horizontal_n: float = Positive
 
 
 class DaqParameters(Parameters):
-    """Data acquisition: sample rate and converter resolution."""
+    """Data acquisition: sample rate, converter resolution and the analog front end."""
 
     sample_rate_hz: float = Positive
     bits: int = Field(gt=1, le=32)
     input_range_v: float = Positive
+    anti_alias_hz: float = Positive
+    anti_alias_order: int = Field(gt=0, le=8)
+    motor_angle_range_rad: float = Positive
 
 
 class GoniometerParameters(Parameters):
@@ -78,8 +139,10 @@ class GoniometerParameters(Parameters):
 
     sensitivity_rad_per_v: float = Positive
     sensitivity_ci95_rad_per_v: float = NonNegative
+    sensitivity_error_fraction: float = Field(gt=-1, lt=1)
     precision_small_rad: float = NonNegative
     precision_full_scale_rad: float = NonNegative
+    full_scale_rad: float = Positive
 
 
 class CalibrationProtocol(Parameters):
@@ -92,6 +155,7 @@ class CalibrationProtocol(Parameters):
     ramp_s: float = Positive
     hold_s: float = NonNegative
     max_gap_s: float = NonNegative
+    quiet_s: float = NonNegative
 
 
 class WalkingProtocol(Parameters):
@@ -105,6 +169,15 @@ class WalkingProtocol(Parameters):
     amplitude_rad: float = Positive
     ramp_s: float = Positive
     hold_s: float = NonNegative
+    return_s: float = Positive
+    window_ms: float = Positive
+
+
+class TriggerParameters(Parameters):
+    """The microcontroller's heel-contact trigger and delay counter (source of onset jitter)."""
+
+    input_offset_sd_n: float = NonNegative
+    counter_error_sd_fraction: float = Fraction
 
 
 class BenchProtocol(Parameters):
@@ -115,19 +188,101 @@ class BenchProtocol(Parameters):
     tests_per_distance: int = Field(gt=0)
     distances_m: tuple[float, ...] = Field(min_length=1)
     stiffness_nm_per_rad: tuple[float, ...] = Field(min_length=1)
+    load_cell_noise_n: float = NonNegative
+
+    @model_validator(mode="after")
+    def _law(self) -> BenchProtocol:
+        _same_length("bench", distances_m=self.distances_m, stiffness=self.stiffness_nm_per_rad)
+        _increasing("bench", "distances_m", self.distances_m)
+        return self
 
 
 class SubjectGeometry(Parameters):
-    """Where the ankle centre sits relative to the plate and the heel-contact COP."""
+    """Where the ankle centre sits relative to the plate, the hinge and the heel-contact COP.
+
+    ``misalignment_*`` place the ankle centre relative to the hinge axis (anterior, and above
+    it); the hinge height is set to ``ankle_height_m - misalignment_vertical_m``.
+    """
 
     ankle_height_m: float = Positive
     heel_to_ankle_m: float = NonNegative
+    misalignment_anterior_m: float
+    misalignment_vertical_m: float
+    shank_length_m: float = Positive
+    leg_stiffness_n_per_m: float = NonNegative
+
+
+class GaitParameters(Parameters):
+    """Stance phase on the plate: ground reaction force, COP progression, variability."""
+
+    body_mass_kg: float = Positive
+    stance_s: float = Positive
+    stance_sd_fraction: float = Fraction
+    loading_s: float = Positive
+    loading_sd_fraction: float = Fraction
+    unloading_s: float = Positive
+    vertical_base_bw: float = Positive
+    vertical_hump_bw: float = NonNegative
+    force_sd_fraction: float = Fraction
+    braking_bw: float = NonNegative
+    propulsion_bw: float = NonNegative
+    lateral_bw: float = NonNegative
+    cop_knots_fraction: tuple[float, ...] = Field(min_length=2)
+    cop_knots_m: tuple[float, ...] = Field(min_length=2)
+    cop_sd_fraction: float = Fraction
+    foot_flat_fraction: float = Fraction
+    heel_off_fraction: float = Fraction
+    placement_sd_m: float = NonNegative
+    lateral_position_m: float
+    pre_contact_s: float = Positive
+    pre_contact_jitter_s: float = NonNegative
+    trial_duration_s: float = Positive
+
+    @model_validator(mode="after")
+    def _knots(self) -> GaitParameters:
+        _same_length(
+            "gait", cop_knots_fraction=self.cop_knots_fraction, cop_knots_m=self.cop_knots_m
+        )
+        _increasing("gait", "cop_knots_fraction", self.cop_knots_fraction)
+        if not self.foot_flat_fraction < self.heel_off_fraction:
+            raise ValueError("gait.foot_flat_fraction must be below gait.heel_off_fraction")
+        return self
+
+
+class ProstheticFootParameters(Parameters):
+    """Solid-ankle prosthetic foot: stiffness follows the bench law of the COP lever arm."""
+
+    damping_nms_per_rad: float = NonNegative
+    inertia_kgm2: float = Positive
+    shell_compliance_rad_per_nm: float = NonNegative
+    shell_damping_nms_per_rad: float = NonNegative
+
+
+class HumanAnkleParameters(Parameters):
+    """Human ankle: stiffness and damping varying through stance (published walking values)."""
+
+    knots_s: tuple[float, ...] = Field(min_length=2)
+    stiffness_nm_per_rad_per_kg: tuple[float, ...] = Field(min_length=2)
+    damping_nms_per_rad_per_kg: float = NonNegative
+    inertia_kgm2: float = Positive
+    angle_knots_fraction: tuple[float, ...] = Field(min_length=2)
+    angle_knots_rad: tuple[float, ...] = Field(min_length=2)
+
+    @model_validator(mode="after")
+    def _knots(self) -> HumanAnkleParameters:
+        _same_length("human", knots_s=self.knots_s, stiffness=self.stiffness_nm_per_rad_per_kg)
+        _same_length("human", angle_knots=self.angle_knots_fraction, angle=self.angle_knots_rad)
+        _increasing("human", "knots_s", self.knots_s)
+        _increasing("human", "angle_knots_fraction", self.angle_knots_fraction)
+        return self
 
 
 class PerturberatorParameters(Parameters):
-    """Every parameter of the Perturberator platform and its protocols."""
+    """Every parameter of the Perturberator platform, its subject and its protocols."""
 
+    motor: MotorParameters
     transmission: TransmissionParameters
+    hinge: HingeParameters
     servo: ServoParameters
     motion_plan: MotionPlanParameters
     force_plate: ForcePlateParameters
@@ -135,5 +290,9 @@ class PerturberatorParameters(Parameters):
     goniometer: GoniometerParameters
     calibration: CalibrationProtocol
     walking: WalkingProtocol
+    trigger: TriggerParameters
     bench: BenchProtocol
     geometry: SubjectGeometry
+    gait: GaitParameters
+    prosthetic: ProstheticFootParameters
+    human: HumanAnkleParameters

@@ -1,9 +1,33 @@
 """Plant models and digital twins (DESIGN.md section 2, ``sim``)."""
 
+from anklelab.sim.artefacts import Artefacts
 from anklelab.sim.capstan import CapstanTwin, SimulationResult, linear_platform
+from anklelab.sim.drivetrain import FootLoad, PlatformRun, simulate_platform
+from anklelab.sim.foot import FootModel, NominalStance, bench_law, foot_load, foot_model
+from anklelab.sim.gait import (
+    GaitTrials,
+    StanceSignals,
+    heel_contact_times,
+    sample_gait,
+    stance_signals,
+)
 
 __all__ = [
+    "Artefacts",
     "CapstanTwin",
+    "FootLoad",
+    "FootModel",
+    "GaitTrials",
+    "NominalStance",
+    "PlatformRun",
     "SimulationResult",
+    "StanceSignals",
+    "bench_law",
+    "foot_load",
+    "foot_model",
+    "heel_contact_times",
     "linear_platform",
+    "sample_gait",
+    "simulate_platform",
+    "stance_signals",
 ]

@@ -1,0 +1,241 @@
+"""The servo-driven hinge of the Perturberator: drive cascade, drivetrain, hinge and plate load.
+
+Model (all referred to the platform output, dorsiflexion positive)::
+
+    current loop   tau' = 2 pi f_c (tau_cmd - tau),   |tau_cmd| <= min(653 N·m, N Kt I_peak)
+    motor+gearhead J_m w_m' = tau - T_s - b_m w_m - T_c tanh(w_m / w_e)
+    hinge + plate  J_h w_h' = T_s - b_h w_h - k_g sin(th_h) + M_foot
+    coupler        T_s = k_s (th_m - th_h) + c_s (w_m - w_h)
+
+with ``J_m = (J_rotor + J_gearhead) N²`` and ``k_s`` the coupler + transmission stiffness (paper
+000: 12 N·m/arcmin). ``M_foot`` is the moment of the foot's load about the hinge axis (see
+:mod:`anklelab.sim.foot`). The drive closes, on the quantised motor encoder, a proportional
+position loop at the position-loop rate (8 kHz) and a PI velocity loop (backward-difference
+velocity) at the velocity-loop rate (16 kHz), whose torque command takes effect one velocity
+sample later. The plant is integrated by RK4 with the command held, ``substeps`` steps per
+velocity-loop period (the integration step the convergence test halves); the Coulomb term and
+the hinge's tilt (sin, cos) are evaluated once per integration step.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+
+from anklelab.platforms.perturberator import PerturberatorParameters
+from anklelab.sim import _kernels as K
+from anklelab.sim.artefacts import Artefacts
+from anklelab.sim.forceplate_dynamics import anti_alias_sos, mode_sos
+
+__all__ = ["GRAVITY", "FootLoad", "PlatformRun", "platform_constants", "simulate_platform"]
+
+GRAVITY = 9.81
+
+
+@dataclass(frozen=True)
+class FootLoad:
+    """What stands on the plate, per trial, in the form the kernel integrates.
+
+    Attributes
+    ----------
+    channels : ndarray, shape (n_trials, 8, n_samples)
+        Lab GRF on the foot (anterior, right, up; N), nominal ankle torque (N·m), lateral COP
+        (m), foot stiffness (N·m/rad), damping (N·m·s/rad) and contact (0/1), sampled at ``fs``
+        from the start of the trial (order of :mod:`anklelab.sim._kernels` ``G_*``).
+    fs : float
+        Sample rate of ``channels``, Hz.
+    scalars : ndarray, shape (n_trials, 7)
+        Foot inertia (kg·m²), ankle anterior position on the plate (m), ankle height above the
+        surface (m), misalignment gain ``e_z / shank length``, leg stiffness (N/m), shell
+        stiffness (N·m/rad, 0 = rigid contact), shell damping (order of ``F_*``).
+    """
+
+    channels: NDArray[np.float64]
+    fs: float
+    scalars: NDArray[np.float64]
+
+
+@dataclass(frozen=True)
+class PlatformRun:
+    """Recorded true signals of a batch of trials, each ``(n_trials, n_samples)`` at ``fs``.
+
+    ``ankle_angle`` is the ankle's rotation caused by the platform (foot relative to shank);
+    ``ankle_torque`` the external dorsiflexing moment on the foot about the ankle centre;
+    ``wrench`` (``(n_trials, 6, n_samples)``, or None) the plate load of
+    :mod:`anklelab.sim.forceplate_dynamics`; ``loop`` (or None) the position loop's encoder,
+    controller output and velocity command at the position-loop rate; ``snapshot`` (or None)
+    each trial's full state at its ``fork`` step, to resume from.
+    """
+
+    fs: float
+    motor_angle: NDArray[np.float64]
+    hinge_angle: NDArray[np.float64]
+    ankle_angle: NDArray[np.float64]
+    ankle_torque: NDArray[np.float64]
+    motor_torque: NDArray[np.float64]
+    wrench: NDArray[np.float64] | None
+    loop: dict[str, NDArray[np.float64]] | None
+    snapshot: NDArray[np.float64] | None = None
+
+
+def platform_constants(
+    params: PerturberatorParameters, *, hinge_height_m: float, quantisation: bool = True
+) -> NDArray[np.float64]:
+    """The kernel's constant vector (indices ``anklelab.sim._kernels`` ``J_M`` ... ``DT``)."""
+    m, tr, hg, sv, fp = (
+        params.motor,
+        params.transmission,
+        params.hinge,
+        params.servo,
+        params.force_plate,
+    )
+    n = tr.ratio
+    pc = np.zeros(K.N_PC)
+    pc[K.J_M] = (m.rotor_inertia_kgm2 + m.gearhead_input_inertia_kgm2) * n * n
+    pc[K.K_S] = tr.series_stiffness_nm_per_rad
+    pc[K.C_S] = tr.series_damping_nms_per_rad
+    pc[K.B_M] = tr.viscous_nms_per_rad
+    pc[K.T_COUL] = tr.coulomb_nm
+    pc[K.W_EPS] = tr.coulomb_smoothing_rad_per_s
+    pc[K.J_H] = hg.inertia_kgm2
+    pc[K.B_H] = hg.viscous_nms_per_rad
+    pc[K.K_G] = hg.gravity_stiffness_nm_per_rad
+    pc[K.TAU_MAX] = min(tr.peak_output_torque_nm, m.torque_constant_nm_per_a * m.peak_current_a * n)
+    pc[K.INV_TC] = 2 * np.pi * sv.current_bandwidth_hz
+    pc[K.KPP] = sv.position_gain_per_s
+    pc[K.KVP] = sv.velocity_gain_nms_per_rad
+    pc[K.WI] = 2 * np.pi * sv.velocity_integral_hz
+    pc[K.ENC_Q] = sv.encoder_resolution_rad / n if quantisation else 0.0
+    pc[K.AZ0] = fp.az0_m
+    pc[K.X_H] = hg.axis_anterior_m
+    pc[K.H_H] = hinge_height_m
+    pc[K.M_T] = fp.top_plate_mass_kg
+    pc[K.I_T] = fp.top_plate_inertia_kgm2
+    pc[K.X_T] = 0.0
+    pc[K.Z_T] = fp.top_plate_com_z_m
+    pc[K.GRAV] = GRAVITY
+    pc[K.DT] = 1.0 / sv.velocity_loop_rate_hz
+    return pc
+
+
+def simulate_platform(
+    params: PerturberatorParameters,
+    reference: NDArray[np.float64],
+    *,
+    load: FootLoad | None = None,
+    injection: NDArray[np.float64] | None = None,
+    artefacts: Artefacts | None = None,
+    plate: bool = True,
+    record_loop: bool = False,
+    substeps: int = 1,
+    record_fs: float | None = None,
+    fork: NDArray[np.int64] | None = None,
+    resume: tuple[NDArray[np.int64], NDArray[np.float64]] | None = None,
+    stop: NDArray[np.int64] | None = None,
+) -> PlatformRun:
+    """Run the servo-controlled hinge on a batch of position references.
+
+    Parameters
+    ----------
+    params : PerturberatorParameters
+        Platform parameters (gains, drivetrain, plate).
+    reference : ndarray, shape (n_trials, n_ticks)
+        Position command at each position-loop tick, rad (the drive's step counter times the
+        step size, see :mod:`anklelab.control.motion_plan`).
+    load : FootLoad, optional
+        Foot and gait on the plate; None for an empty plate.
+    injection : ndarray, shape (n_trials, n_ticks), optional
+        Velocity command added to the position controller's output, rad/s (loop measurement).
+    artefacts : Artefacts, optional
+        Which plate and quantisation effects to include (default: all).
+    plate : bool
+        Compute the plate wrench (False skips the plate chain, e.g. for reference runs).
+    record_loop : bool
+        Also record the position loop's signals at the position-loop rate.
+    substeps : int
+        RK4 steps per velocity-loop period.
+    record_fs : float, optional
+        Recording rate (default: the DAQ rate); must divide the position-loop rate.
+    fork : ndarray of int, shape (n_trials,), optional
+        Velocity-loop step at whose start each trial's state is saved (-1: none); returned as
+        ``snapshot``.
+    resume : (steps, states), optional
+        Start each trial at velocity-loop step ``steps[i]`` from ``states[i]`` (a snapshot);
+        samples before it are left at zero.
+    stop : ndarray of int, shape (n_trials,), optional
+        Velocity-loop step at which each trial ends (default: the end of ``reference``).
+
+    Returns
+    -------
+    PlatformRun
+    """
+    art = Artefacts() if artefacts is None else artefacts
+    sv = params.servo
+    if sv.velocity_loop_rate_hz != 2 * sv.position_loop_rate_hz:
+        raise ValueError("servo: the twin needs velocity_loop_rate_hz = 2 x position_loop_rate_hz")
+    if substeps < 1:
+        raise ValueError(f"substeps: expected >= 1, got {substeps}")
+    ref = np.ascontiguousarray(np.atleast_2d(reference), dtype=float)
+    n_trials, n_ticks = ref.shape
+    fs_rec = params.daq.sample_rate_hz if record_fs is None else record_fs
+    rec_every = round(sv.velocity_loop_rate_hz / fs_rec)
+    if not np.isclose(rec_every * fs_rec, sv.velocity_loop_rate_hz) or rec_every % 2:
+        raise ValueError(f"record_fs: {fs_rec} Hz must divide the position-loop rate")
+    geometry = params.geometry
+    hinge_height = geometry.ankle_height_m - geometry.misalignment_vertical_m
+    pc = platform_constants(params, hinge_height_m=hinge_height, quantisation=art.quantisation)
+    if load is None:
+        g = np.zeros((n_trials, 2, K.N_G))
+        fp = np.ones((n_trials, K.N_FP))
+        gait_fs = 1.0
+    else:
+        g, fp, gait_fs = load.channels.transpose(0, 2, 1), load.scalars, load.fs
+    inj = np.zeros((n_trials, 0)) if injection is None else np.atleast_2d(injection).astype(float)
+    if inj.size and inj.shape != ref.shape:
+        raise ValueError(f"injection: expected shape {ref.shape}, got {inj.shape}")
+    fplate = sv.position_loop_rate_hz
+    fpp = params.force_plate
+    sos_v = mode_sos(fpp.vertical_natural_frequency_hz, fpp.damping_ratio, fplate)
+    sos_h = mode_sos(fpp.horizontal_natural_frequency_hz, fpp.damping_ratio, fplate)
+    sos_aa = anti_alias_sos(params.daq.anti_alias_hz, params.daq.anti_alias_order, fplate)
+    flags = np.zeros(K.N_FL, dtype=np.int64)
+    flags[K.FL_FOOT] = load is not None
+    flags[K.FL_PLATE] = plate
+    flags[K.FL_INERTIA] = art.plate_inertia
+    flags[K.FL_RESON] = art.resonance
+    flags[K.FL_AA] = art.anti_alias
+    flags[K.FL_LOOP] = record_loop
+    flags[K.FL_NSUB] = substeps
+    flags[K.FL_RESUME] = resume is not None
+    n_steps = 2 * n_ticks
+    span = np.zeros((n_trials, 2), dtype=np.int64)
+    span[:, 1] = n_steps if stop is None else stop
+    start_state = np.zeros((n_trials, K.N_SNAP))
+    if resume is not None:
+        span[:, 0], start_state = resume[0], np.ascontiguousarray(resume[1], dtype=float)
+    forks = np.full(n_trials, -1, dtype=np.int64) if fork is None else fork.astype(np.int64)
+    snap = np.zeros((n_trials, K.N_SNAP))
+    n_rec = -(-2 * n_ticks // rec_every)
+    mech = np.zeros((n_trials, K.N_MECH, n_rec))
+    wrench = np.zeros((n_trials, K.N_WRENCH, n_rec if plate else 0))
+    loop = np.zeros((n_trials, 3, n_ticks if record_loop else 0))
+    K.run_batch(
+        pc, np.ascontiguousarray(fp, dtype=float), np.ascontiguousarray(g, dtype=float),
+        float(gait_fs), ref, np.ascontiguousarray(inj), flags, sos_v, sos_h, sos_aa,
+        2, rec_every, span, start_state, forks, mech, wrench, loop, snap,
+    )  # fmt: skip
+    return PlatformRun(
+        fs=fs_rec,
+        motor_angle=mech[:, K.O_THM],
+        hinge_angle=mech[:, K.O_THH],
+        ankle_angle=mech[:, K.O_PHI],
+        ankle_torque=mech[:, K.O_TA],
+        motor_torque=mech[:, K.O_TAU],
+        wrench=wrench if plate else None,
+        loop=dict(zip(("encoder", "control", "command"), loop.transpose(1, 0, 2), strict=True))
+        if record_loop
+        else None,
+        snapshot=snap if fork is not None else None,
+    )

@@ -1,0 +1,103 @@
+"""Force-plate signal chain of the twin: structural modes, anti-alias filter, sensors, DAQ.
+
+The compiled kernel (:mod:`anklelab.sim._kernels`) produces the load on the plate's sensors as a
+wrench in the *sagittal plate frame* (Kistler axes of the tilted plate with x anterior, y right,
+z down; moments about the centre of the sensor plane). It is the foot's load plus, while the
+hinge moves, the top plate's own inertial and gravity-tilt loads, zeroed at rest as a charge
+amplifier is. The plate's structural modes are second-order low-pass resonances applied to the
+vertical group (Fz, Mx, My) and the horizontal group (Fx, Fy, Mz), followed by the amplifier's
+anti-alias low-pass, all run at the position-loop rate and then sampled by the DAQ. This module
+designs those filters, maps the wrench to the eight channels of the mounted plate (its
+``anterior_axis``) and adds what the DAQ adds: per-channel drift, noise and 16-bit quantisation.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numpy.typing import NDArray
+from scipy import signal
+
+from anklelab.forceplate import PlateGeometry
+
+__all__ = [
+    "anti_alias_sos",
+    "daq_quantize",
+    "mode_sos",
+    "mounting_rotation",
+    "sensor_channels",
+]
+
+
+def mode_sos(natural_frequency_hz: float, damping_ratio: float, fs: float) -> NDArray[np.float64]:
+    """One second-order section of ``w²/(s² + 2 zeta w s + w²)`` (unit DC gain) at rate ``fs``.
+
+    Bilinear transform pre-warped at the natural frequency, so the discrete resonance sits
+    exactly at ``natural_frequency_hz``.
+
+    Examples
+    --------
+    >>> sos = mode_sos(300.0, 0.05, 8000.0)
+    >>> w, h = signal.sosfreqz(sos, [0.0, 300.0], fs=8000.0)
+    >>> round(float(abs(h[0])), 9), round(float(abs(h[1])), 3)   # DC gain 1, peak 1/(2 zeta)
+    (1.0, 10.0)
+    """
+    w = 2 * np.pi * natural_frequency_hz
+    wa = 2 * fs * np.tan(w / (2 * fs))  # pre-warped analog frequency
+    z, p, k = signal.bilinear_zpk([], np.roots([1.0, 2 * damping_ratio * wa, wa * wa]), wa * wa, fs)
+    return signal.zpk2sos(z, p, k)
+
+
+def anti_alias_sos(cutoff_hz: float, order: int, fs: float) -> NDArray[np.float64]:
+    """Butterworth low-pass of the plate amplifier, as second-order sections at rate ``fs``."""
+    return signal.butter(order, cutoff_hz, fs=fs, output="sos")
+
+
+def mounting_rotation(anterior_axis: str) -> NDArray[np.float64]:
+    """3x3 rotation taking sagittal-frame vectors (x anterior, y right, z down) to plate axes.
+
+    Examples
+    --------
+    >>> mounting_rotation("+y") @ [1.0, 0.0, 0.0]    # anterior is the plate's +y
+    array([0., 1., 0.])
+    """
+    x = {"+x": (1, 0), "-x": (-1, 0), "+y": (0, 1), "-y": (0, -1)}[anterior_axis]
+    ex = np.array([x[0], x[1], 0.0])
+    ey = np.cross([0.0, 0.0, 1.0], ex)  # right = down x anterior
+    return np.column_stack([ex, ey, [0.0, 0.0, 1.0]])
+
+
+def sensor_channels(wrench: NDArray[np.float64], geometry: PlateGeometry) -> NDArray[np.float64]:
+    """The eight channels that carry a sagittal-frame wrench on a plate mounted as ``geometry``.
+
+    Parameters
+    ----------
+    wrench : ndarray, shape (..., 6, n)
+        (Fx, Fy, Fz, Mx, My, Mz) in the sagittal plate frame, N and N·m.
+    geometry : PlateGeometry
+        Sensor offsets and ``anterior_axis`` of the mounted plate.
+
+    Returns
+    -------
+    ndarray, shape (..., 8, n)
+        Channels in :data:`anklelab.forceplate.CHANNELS` order (minimum-norm split, so
+        :func:`anklelab.forceplate.resultants` returns the wrench exactly).
+    """
+    r = mounting_rotation(geometry.anterior_axis)
+    rot = np.zeros((6, 6))
+    rot[:3, :3] = r
+    rot[3:, 3:] = r
+    to_channels = np.linalg.pinv(geometry.matrix()) @ rot
+    return np.einsum("cw,...wn->...cn", to_channels, wrench)
+
+
+def daq_quantize(values: NDArray[np.float64], full_scale: float, bits: int) -> NDArray[np.float64]:
+    """Round to the steps of a ``bits``-bit converter spanning ``±full_scale`` (and clip).
+
+    Examples
+    --------
+    >>> daq_quantize(np.array([0.3, 2.0]), full_scale=1.0, bits=2)
+    array([0.5, 0.5])
+    """
+    step = 2 * full_scale / 2**bits
+    codes = np.clip(np.round(values / step), -(2 ** (bits - 1)), 2 ** (bits - 1) - 1)
+    return codes * step
