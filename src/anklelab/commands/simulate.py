@@ -45,3 +45,58 @@ def capstan_ident(
         f"{out}: {len(data.spindown)} spin-down runs and {len(data.chirp)} chirp at "
         f"{sample_rate:g} Hz"
     )
+
+
+@app.command("perturberator")
+def perturberator(
+    out: Annotated[Path, typer.Option("--out", "-o", help="Session to write (.h5 or directory).")],
+    seed: Annotated[int, typer.Option(help="Random seed; the same seed gives the same bytes.")] = 0,
+    foot: Annotated[str, typer.Option(help="What walks on the plate: prosthetic or human.")] = (
+        "prosthetic"
+    ),
+    trials_per_point: Annotated[
+        int | None, typer.Option(help="Perturbed trials per timing point (default: 100).")
+    ] = None,
+    unperturbed: Annotated[
+        int | None, typer.Option(help="Unperturbed walking trials (default: 400).")
+    ] = None,
+    format: Annotated[str, typer.Option(help="h5 (native store) or dir (CSV directory).")] = "h5",
+    params: Annotated[
+        Path | None,
+        typer.Option(help="A perturberator parameter file to use instead of the shipped one."),
+    ] = None,
+    no_artefacts: Annotated[
+        bool, typer.Option("--no-artefacts", help="Ideal sensors and nominal gait.")
+    ] = False,
+) -> None:
+    """Paper 000's session on the Perturberator twin: calibration, walking and bench tests.
+
+    The session carries a truth group (parameters, reference stiffness per timing point and
+    direction, true heel contacts and onsets, time courses) for validating analyses.
+    """
+    from anklelab.commands._progress import recording_progress
+    from anklelab.data import save_session
+    from anklelab.errors import ParameterError
+    from anklelab.experiments.perturberator import simulate_perturberator
+    from anklelab.platforms import load_platform
+
+    if format not in ("h5", "dir"):
+        raise ParameterError(f"--format: expected 'h5' or 'dir', got {format!r}")
+    if foot not in ("prosthetic", "human"):
+        raise ParameterError(f"--foot: expected 'prosthetic' or 'human', got {foot!r}")
+    parameters = load_platform("perturberator", params)
+    with recording_progress() as task:
+        session = simulate_perturberator(
+            parameters,
+            seed=seed,
+            foot=foot,
+            trials_per_point=trials_per_point,
+            n_unperturbed=unperturbed,
+            artefacts=not no_artefacts,
+            progress=task("simulating trials"),
+        )
+        save_session(session, out, format=format, progress=task(f"writing {format}"))  # type: ignore[arg-type]
+    typer.echo(
+        f"{out}: {len(session.calibration)} calibration, {len(session.walking)} walking and "
+        f"{len(session.bench)} bench recordings ({foot} foot, seed {seed})"
+    )
