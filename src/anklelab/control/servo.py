@@ -27,6 +27,7 @@ __all__ = [
     "fit_second_order",
     "loop_margins",
     "periodic_frf",
+    "phase_crossing_hz",
     "prbs",
 ]
 
@@ -191,6 +192,29 @@ def bandwidth_hz(freqs: ArrayLike, frf: ArrayLike) -> float:
     a, b = 20 * np.log10(mag[i - 1]), 20 * np.log10(mag[i])
     target = 20 * np.log10(level)
     return float(f[i - 1] + (f[i] - f[i - 1]) * (a - target) / (a - b))
+
+
+def phase_crossing_hz(freqs: ArrayLike, frf: ArrayLike, phase_deg: float = -90.0) -> float:
+    """First frequency where the (unwrapped) phase of ``frf`` falls to ``phase_deg``, Hz.
+
+    A second-order closed loop lags by 90 deg exactly at its natural frequency, whatever its
+    damping, so this reads the natural frequency off a measured response without a model.
+
+    Examples
+    --------
+    >>> f = np.linspace(1.0, 600.0, 600)
+    >>> round(phase_crossing_hz(f, _second_order(f, 200.0, 0.4, 0.0)), 3)
+    200.0
+    """
+    f = np.asarray(freqs, dtype=float)
+    phase = np.degrees(np.unwrap(np.angle(np.asarray(frf))))
+    below = np.flatnonzero(phase <= phase_deg)
+    if below.size == 0 or below[0] == 0:
+        return float("nan")
+    i = below[0]
+    return float(
+        f[i - 1] + (f[i] - f[i - 1]) * (phase_deg - phase[i - 1]) / (phase[i] - phase[i - 1])
+    )
 
 
 def loop_margins(freqs: ArrayLike, loop: ArrayLike) -> LoopMargins:
