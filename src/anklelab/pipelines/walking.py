@@ -543,10 +543,18 @@ def _samples(ms: float, fs: float) -> int:
 
 
 def _timing_point(
-    stance: Trials, key: str, settings: WalkingSettings, rng: np.random.Generator
+    stance: Trials,
+    key: str,
+    unperturbed: NDArray[np.float64],
+    n_unperturbed: int,
+    settings: WalkingSettings,
+    rng: np.random.Generator,
 ) -> TimingPoint:
-    """Bootstrap impedance of one condition (``"dorsi/225"``) from the stance trials."""
-    group, unperturbed = stance[key], stance["none"]
+    """Bootstrap impedance of one condition (``"dorsi/225"``) from the stance trials.
+
+    ``unperturbed`` is the mean unperturbed stance trial, shape (n_channels, n_times).
+    """
+    group = stance[key]
     fs = stance.fs
     windows = settings.windows_ms()
     lengths = [_samples(w, fs) for w in windows]
@@ -554,7 +562,7 @@ def _timing_point(
     reference = np.maximum(onset - round(settings.offset_reference_ms * fs / 1000.0), 0)
     index = np.concatenate([reference[:, None], onset[:, None] + np.arange(max(lengths))], axis=1)
     segment = np.take_along_axis(group.data, index[:, None, :], axis=-1)
-    nominal = unperturbed.average()[:, index].transpose(1, 0, 2)
+    nominal = unperturbed[:, index].transpose(1, 0, 2)
     difference = segment[:, :4] - nominal[:, :4]  # angle, velocity, acceleration, torque
     difference[:, [_ANGLE, _TORQUE]] -= difference[:, [_ANGLE, _TORQUE], :1]
     response, nominal = difference[..., 1:], nominal[..., 1:]
@@ -570,7 +578,7 @@ def _timing_point(
         delay_ms=float(group.metadata["delay_ms"][0]),
         direction=key.split("/")[0],
         n_perturbed=len(group),
-        n_unperturbed=len(unperturbed),
+        n_unperturbed=n_unperturbed,
         cop_m=float(weight @ nominal[:, _DX, :n].mean(axis=0) / weight.sum()),
         stiffness=fit.stiffness[0],
         damping=fit.damping[0],
@@ -633,14 +641,19 @@ def analyze_walking(
         filter_vaf, filter_vaf_by_channel = _score_filters(filters, list(session.calibration))
     report(STEPS[1])
     stance = _stance_trials(session, settings, filters)
-    if len(stance["none"]) == 0:
+    unperturbed = stance["none"]
+    if len(unperturbed) == 0:
         raise SessionFormatError(
             "walking/trials.csv: no usable unperturbed trials, so the walking profile cannot be "
             f"removed; drop reasons: {_drop_summary(stance)}"
         )
     report(STEPS[2])
     rng = np.random.default_rng(settings.seed)
-    points = [_timing_point(stance, key, settings, rng) for key in _condition_order(stance)]
+    nominal = unperturbed.average()
+    points = [
+        _timing_point(stance, key, nominal, len(unperturbed), settings, rng)
+        for key in _condition_order(stance)
+    ]
     report(STEPS[3])
     return WalkingResults(
         settings=settings,

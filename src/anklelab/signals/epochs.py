@@ -132,7 +132,8 @@ class Trials:
         if "condition" not in self.metadata:
             raise KeyError(f"{key!r}: these trials have no 'condition' metadata")
         tags = set(key.split("/"))
-        return np.array([tags <= set(str(c).split("/")) for c in self.metadata["condition"]])
+        names, inverse = np.unique(self.metadata["condition"].astype(str), return_inverse=True)
+        return np.array([tags <= set(name.split("/")) for name in names], dtype=bool)[inverse]
 
     def __getitem__(self, key: str | int | slice | ArrayLike) -> Trials:
         """Trials matching condition tags (``"dorsi/225"``), or by position/boolean mask."""

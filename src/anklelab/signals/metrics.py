@@ -45,4 +45,5 @@ def vaf(
         residual = residual.sum(axis=pool, keepdims=True)
         total = total.sum(axis=pool, keepdims=True)
         axes = (axis, pool)
-    return np.squeeze(100.0 * (1.0 - residual / total), axis=axes)
+    with np.errstate(invalid="ignore", divide="ignore"):  # a constant signal has no VAF (NaN)
+        return np.squeeze(100.0 * (1.0 - residual / total), axis=axes)
