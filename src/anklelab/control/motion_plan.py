@@ -79,6 +79,8 @@ class StepDirectionPlan:
             Steps counted at each tick times the step size, rad.
         """
         planned = np.atleast_2d(np.asarray(planned_rad, dtype=float))
+        if not np.isfinite(planned).all():
+            raise SafetyLimitError("motion plan: planned angles must be finite (NaN/inf refused)")
         if np.any(np.abs(planned) > self.angle_limit_rad):
             raise SafetyLimitError(
                 f"motion plan: |angle| up to {np.abs(planned).max():.4g} rad exceeds the "

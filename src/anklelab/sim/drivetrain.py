@@ -24,6 +24,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
+from anklelab.errors import SafetyLimitError
 from anklelab.platforms.perturberator import PerturberatorParameters
 from anklelab.sim import _kernels as K
 from anklelab.sim.artefacts import Artefacts
@@ -178,6 +179,8 @@ def simulate_platform(
     if substeps < 1:
         raise ValueError(f"substeps: expected >= 1, got {substeps}")
     ref = np.ascontiguousarray(np.atleast_2d(reference), dtype=float)
+    if not np.isfinite(ref).all():
+        raise SafetyLimitError("reference: the drive refuses a non-finite position command")
     n_trials, n_ticks = ref.shape
     fs_rec = params.daq.sample_rate_hz if record_fs is None else record_fs
     rec_every = round(sv.velocity_loop_rate_hz / fs_rec)

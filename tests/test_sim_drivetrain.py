@@ -1,0 +1,106 @@
+"""The servo-driven hinge: convergence in the integration step, static loads, limits, faults."""
+
+import numpy as np
+import pytest
+
+from anklelab.errors import SafetyLimitError
+from anklelab.experiments import simulate_perturberator
+from anklelab.platforms import load_platform
+from anklelab.sim import _kernels as K
+from anklelab.sim.artefacts import Artefacts
+from anklelab.sim.drivetrain import FootLoad, platform_constants, simulate_platform
+
+
+@pytest.fixture(scope="module")
+def params():
+    return load_platform("perturberator")
+
+
+def constant_load(params, n_samples, torque_nm, vertical_n=700.0):
+    """The plate carrying a steady load: a vertical force with a moment about the ankle."""
+    channels = np.zeros((1, K.N_G, n_samples))
+    channels[:, K.G_Z] = vertical_n
+    channels[:, K.G_TNOM] = torque_nm
+    scalars = np.zeros((1, K.N_FP))
+    scalars[:, K.F_IF] = 0.3
+    scalars[:, K.F_XA] = params.hinge.axis_anterior_m
+    scalars[:, K.F_DZ] = params.geometry.ankle_height_m
+    return FootLoad(channels, 1000.0, scalars)
+
+
+def test_halving_the_integration_step_changes_recordings_by_under_half_a_percent():
+    art = Artefacts(noise=False, drift=False, quantisation=False)
+    kw = dict(trials_per_point=1, n_unperturbed=1, n_calibration=1, bench=False, seed=2)
+    coarse = simulate_perturberator(artefacts=art, substeps=1, **kw)
+    fine = simulate_perturberator(artefacts=art, substeps=2, **kw)
+    pairs = [(a.recording, b.recording) for a, b in zip(coarse.walking, fine.walking, strict=True)]
+    pairs += list(zip(coarse.calibration, fine.calibration, strict=True))
+    worst = 0.0
+    for a, b in pairs:
+        for column in a.columns:
+            scale = np.abs(a[column]).max()
+            if scale > 0:
+                worst = max(worst, np.abs(a[column] - b[column]).max() / scale)
+    assert 0 < worst < 0.005
+
+
+def test_a_steady_load_winds_up_the_coupler_while_the_servo_holds_the_motor(params):
+    n = 1500
+    run = simulate_platform(
+        params, np.zeros((1, n * 8)), load=constant_load(params, n, 50.0), plate=False
+    )
+    pc = platform_constants(params, hinge_height_m=params.geometry.ankle_height_m)
+    expected = -50.0 / (
+        pc[K.K_S] + pc[K.K_G]
+    )  # dorsiflexing moment on the foot tilts the plate down
+    assert run.hinge_angle[0, -10] == pytest.approx(expected, rel=0.01)
+    assert abs(run.motor_angle[0, -10]) < 1e-3 * abs(expected)  # integral action removes the error
+    assert run.ankle_torque[0, -10] == pytest.approx(50.0)
+    assert run.motor_torque[0, -10] == pytest.approx(50.0, rel=0.01)
+
+
+def test_output_torque_never_exceeds_the_peak_rating(params):
+    step = np.full((1, 4000), 0.02)  # a raw 20 mrad step, no motion plan
+    run = simulate_platform(params, step, plate=False, record_fs=8000.0)
+    peak = params.transmission.peak_output_torque_nm
+    assert np.abs(run.motor_torque).max() <= peak + 1e-9
+    assert np.isclose(np.abs(run.motor_torque).max(), peak, rtol=1e-3)  # it does saturate
+    assert run.motor_angle[0, -1] == pytest.approx(0.02, abs=1e-5)
+
+
+def test_encoder_quantisation_follows_the_artefact_switch(params):
+    ref = np.full((1, 800), 1e-3)
+    on = simulate_platform(params, ref, plate=False, record_loop=True, record_fs=8000.0)
+    off = simulate_platform(
+        params, ref, plate=False, record_loop=True, record_fs=8000.0,
+        artefacts=Artefacts(quantisation=False),
+    )  # fmt: skip
+    q = params.servo.encoder_resolution_rad / params.transmission.ratio
+    counts = on.loop["encoder"][0] / q
+    assert np.allclose(counts, np.round(counts), atol=1e-6)
+    assert not np.allclose(off.loop["encoder"][0] / q, np.round(off.loop["encoder"][0] / q))
+
+
+def test_the_drive_refuses_non_finite_commands(params):
+    ref = np.zeros((1, 80))
+    ref[0, 10] = np.inf
+    with pytest.raises(SafetyLimitError, match="non-finite"):
+        simulate_platform(params, ref)
+    with pytest.raises(ValueError, match="substeps"):
+        simulate_platform(params, np.zeros((1, 80)), substeps=0)
+    with pytest.raises(ValueError, match="record_fs"):
+        simulate_platform(params, np.zeros((1, 80)), record_fs=3000.0)
+
+
+def test_misaligned_hinge_rotates_the_ankle_more_than_the_plate(params):
+    shifted = params.replace({"geometry.misalignment_vertical_m": 0.045})
+    n = 600
+    load = constant_load(shifted, n, 0.0)
+    load.channels[:, K.G_CONTACT] = 1.0
+    load.channels[:, K.G_K] = 1000.0
+    load.scalars[:, K.F_MIS] = 0.045 / shifted.geometry.shank_length_m
+    ref = np.zeros((1, n * 8))
+    ref[0, 2400:] = 0.01
+    run = simulate_platform(shifted, ref, load=load, plate=False)
+    gain = run.ankle_angle[0, -10] / run.hinge_angle[0, -10]
+    assert gain == pytest.approx(1 + 0.045 / 0.45, rel=1e-6)
