@@ -27,7 +27,7 @@ from numpy.typing import NDArray
 from scipy.signal import cont2discrete
 
 from anklelab.platforms.capstan import CapstanParameters, FrictionParameters
-from anklelab.sim.capstan import linear_platform
+from anklelab.sim.capstan._jit import FAST
 from anklelab.sim.capstan.plant import GRAVITY_M_S2
 
 __all__ = [
@@ -92,7 +92,7 @@ def observer_constants(
     friction : FrictionParameters, optional
         Friction model (e.g. identified); ``params.friction`` by default.
     smoothing_speed_rad_s : float
-        Pinion speed over which the Coulomb sign is smoothed, rad/s.
+        Pinion speed over which the Coulomb sign ramps linearly from -1 to 1, rad/s.
     """
     if not 0 < cutoff_hz < fs / 2:
         raise ValueError(f"cutoff_hz must be in (0, fs/2) = (0, {fs / 2}); got {cutoff_hz}")
@@ -100,8 +100,7 @@ def observer_constants(
         raise ValueError(f"damping_ratio must be > 0; got {damping_ratio}")
     f = params.friction if friction is None else friction
     if inertia_kgm2 is None:
-        model = params.replace({"friction.inertia_kgm2": f.inertia_kgm2})
-        inertia_kgm2 = linear_platform(model).inertia_kgm2
+        inertia_kgm2 = f.inertia_kgm2 * params.capstan.ratio**2 + params.platform.inertia_kgm2
     w0 = 2.0 * math.pi * cutoff_hz
     a = np.array([[0.0, 1.0], [-(w0**2), -2.0 * damping_ratio * w0]])
     b = np.array([[0.0], [w0**2]])
@@ -136,7 +135,7 @@ def new_observer_state() -> NDArray[np.float64]:
     return np.zeros(6)
 
 
-@njit(cache=True)
+@njit(cache=True, fastmath=FAST)
 def observer_update(
     c: ObserverConstants, state: NDArray[np.float64], angle: float, current: float
 ) -> float:
@@ -162,7 +161,8 @@ def observer_update(
     state[5] = angle
     tc = c.coulomb_cw if wp > 0 else c.coulomb_ccw
     b = c.viscous_cw if wp > 0 else c.viscous_ccw
-    friction = c.capstan_ratio * (tc * np.tanh(wp / c.smoothing_speed) + b * wp)
+    sign = min(max(wp / c.smoothing_speed, -1.0), 1.0)
+    friction = c.capstan_ratio * (tc * sign + b * wp)
     model = friction + c.gravity_torque * np.sin(angle + c.com_angle) - c.torque_per_amp * current
     if state[4] == 0.0:
         state[2], state[3], state[4] = c.rest[0] * model, c.rest[1] * model, 1.0

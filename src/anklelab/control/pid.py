@@ -11,7 +11,7 @@ wind the integral up faster than a small one, while near the set-point the integ
 offset static friction leaves. ``w_hat`` is the encoder angle differentiated and low-pass
 filtered. ``T_friction`` (off by default) is the identified pinion friction, Coulomb and viscous,
 referred to the platform and evaluated at the reference speed while tracking (or the measured
-speed otherwise), its sign smoothed by ``tanh``.
+speed otherwise), its sign ramped linearly over a small speed range.
 
 :func:`position_control_update` is the compiled kernel the twin's loops call;
 :class:`PositionController` runs the same arithmetic tick by tick for Python or hardware loops.
@@ -30,6 +30,7 @@ from pydantic import Field
 from anklelab._params import Parameters
 from anklelab.platforms.capstan import CapstanParameters, FrictionParameters
 from anklelab.sim.capstan import linear_platform
+from anklelab.sim.capstan._jit import FAST
 from anklelab.sim.capstan.plant import GRAVITY_M_S2
 
 __all__ = [
@@ -131,7 +132,8 @@ class ControlConstants(NamedTuple):
     ki: float
     kd: float
     error_limit: float
-    velocity_filter_hz: float
+    dt: float
+    velocity_alpha: float
     gravity_torque: float
     com_angle: float
     friction_gain: float
@@ -147,6 +149,7 @@ class ControlConstants(NamedTuple):
 def control_constants(
     params: CapstanParameters,
     gains: PIDGains,
+    fs: float,
     *,
     gravity_compensation: bool = True,
     friction_compensation: float = 0.0,
@@ -161,6 +164,8 @@ def control_constants(
         Platform model (gravity, ratios, torque constant).
     gains : PIDGains
         PID gains.
+    fs : float
+        Control rate, Hz.
     gravity_compensation : bool
         Add the feed-forward ``m g l sin(theta + alpha)``.
     friction_compensation : float
@@ -168,8 +173,10 @@ def control_constants(
     friction : FrictionParameters, optional
         The friction model to compensate (e.g. the identified one); ``params.friction`` by default.
     smoothing_speed_rad_s : float
-        Pinion speed over which the Coulomb term's sign is smoothed (``tanh``), rad/s.
+        Pinion speed over which the Coulomb term's sign ramps linearly from -1 to 1, rad/s.
     """
+    if not fs > 0:
+        raise ValueError(f"fs must be > 0 Hz; got {fs}")
     if not 0.0 <= friction_compensation <= 1.0:
         raise ValueError(f"friction_compensation must be in [0, 1]; got {friction_compensation}")
     f = params.friction if friction is None else friction
@@ -179,7 +186,8 @@ def control_constants(
         ki=gains.ki_nm_per_rad_s,
         kd=gains.kd_nms_per_rad,
         error_limit=gains.integral_error_limit_rad,
-        velocity_filter_hz=gains.velocity_filter_hz,
+        dt=1.0 / fs,
+        velocity_alpha=-math.expm1(-2.0 * math.pi * gains.velocity_filter_hz / fs),
         gravity_torque=plat.mass_kg * GRAVITY_M_S2 * plat.com_distance_m
         if gravity_compensation
         else 0.0,
@@ -201,24 +209,23 @@ def new_control_state(angle: float = 0.0) -> NDArray[np.float64]:
     return np.array([0.0, angle, 0.0, 0.0])
 
 
-@njit(cache=True)
+@njit(cache=True, fastmath=FAST)
 def friction_feedforward(c: ControlConstants, speed: float) -> float:
     """Modelled friction torque referred to the platform at platform speed ``speed``, N·m."""
     wp = c.capstan_ratio * speed
-    s = np.tanh(wp / c.smoothing_speed)
+    s = min(max(wp / c.smoothing_speed, -1.0), 1.0)
     tc = c.coulomb_cw if wp > 0 else c.coulomb_ccw
     b = c.viscous_cw if wp > 0 else c.viscous_ccw
     return c.capstan_ratio * (tc * s + b * wp)
 
 
-@njit(cache=True)
+@njit(cache=True, fastmath=FAST)
 def position_control_update(
     c: ControlConstants,
     state: NDArray[np.float64],
     reference: float,
     reference_speed: float,
     angle: float,
-    dt: float,
 ) -> tuple[float, float]:
     """One controller tick (compiled).
 
@@ -232,8 +239,6 @@ def position_control_update(
         Desired platform angle (rad) and speed (rad/s).
     angle : float
         Measured platform angle (encoder), rad.
-    dt : float
-        Control period, s.
 
     Returns
     -------
@@ -243,14 +248,12 @@ def position_control_update(
         The speed estimate, rad/s.
     """
     if state[3] > 0:
-        raw = (angle - state[1]) / dt
-        alpha = 1.0 - np.exp(-2.0 * np.pi * c.velocity_filter_hz * dt)
-        state[2] += alpha * (raw - state[2])
+        state[2] += c.velocity_alpha * ((angle - state[1]) / c.dt - state[2])
     state[1] = angle
     state[3] += 1.0
     speed = state[2]
     error = reference - angle
-    state[0] += min(max(error, -c.error_limit), c.error_limit) * dt
+    state[0] += min(max(error, -c.error_limit), c.error_limit) * c.dt
     torque = c.kp * error + c.kd * (reference_speed - speed) + c.ki * state[0]
     torque += c.gravity_torque * np.sin(angle + c.com_angle)
     if c.friction_gain > 0.0:
@@ -286,10 +289,7 @@ class PositionController:
     def __init__(
         self, params: CapstanParameters, gains: PIDGains, fs: float, **options: object
     ) -> None:
-        if not fs > 0:
-            raise ValueError(f"fs must be > 0 Hz; got {fs}")
-        self.constants = control_constants(params, gains, **options)  # type: ignore[arg-type]
-        self.dt = 1.0 / fs
+        self.constants = control_constants(params, gains, fs, **options)  # type: ignore[arg-type]
         self.state = new_control_state()
 
     def reset(self, angle: float = 0.0) -> None:
@@ -299,6 +299,6 @@ class PositionController:
     def step(self, reference: float, reference_speed: float, angle: float) -> float:
         """Current (A) to command for this tick's reference and measured angle (rad)."""
         current, _ = position_control_update(
-            self.constants, self.state, reference, reference_speed, angle, self.dt
+            self.constants, self.state, reference, reference_speed, angle
         )
         return float(current)

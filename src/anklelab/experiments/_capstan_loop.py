@@ -18,6 +18,7 @@ from anklelab.control.haptics import admittance_update, impedance_torque
 from anklelab.control.observer import new_observer_state, observer_update
 from anklelab.control.pid import new_control_state, position_control_update
 from anklelab.control.safety import new_safety_state, safety_update
+from anklelab.sim.capstan._jit import FAST
 from anklelab.sim.capstan.plant import encoder_angle, plant_advance
 
 MODES = {"position": 0, "admittance": 1, "impedance": 2, "open-loop": 3}
@@ -50,7 +51,7 @@ SIGNALS = (
 )
 
 
-@njit(cache=True)
+@njit(cache=True, fastmath=FAST)
 def closed_loop(  # type: ignore[no-untyped-def]
     plant,
     law,
@@ -68,9 +69,7 @@ def closed_loop(  # type: ignore[no-untyped-def]
     fault_kind,
     fault_tick,
     fault_value,
-    fs,
-    n_sub,
-    h,
+    step,
     encoder_resolution,
 ):
     """Run ``len(reference)`` ticks; returns an array ``(n, len(SIGNALS))``.
@@ -80,7 +79,7 @@ def closed_loop(  # type: ignore[no-untyped-def]
     the current (mode ``open-loop``).
     """
     n = len(reference)
-    dt = 1.0 / fs
+    dt = step.h * step.n_sub
     rc = plant.pulley_radius / plant.pinion_radius
     x = x0.copy()
     out = np.empty((n, len(SIGNALS)))
@@ -115,7 +114,7 @@ def closed_loop(  # type: ignore[no-untyped-def]
         else:
             ref, ref_speed = angle, 0.0  # impedance and open loop: no position feedback
         request, speed = position_control_update(
-            ctrl, ctrl_state, ref if np.isfinite(ref) else angle, ref_speed, angle, dt
+            ctrl, ctrl_state, ref if np.isfinite(ref) else angle, ref_speed, angle
         )
         disabled = mode == 0 and not np.isfinite(reference[k])
         if disabled:  # the drive's output stage is off: no current, no current noise
@@ -129,7 +128,7 @@ def closed_loop(  # type: ignore[no-untyped-def]
         if mode == 1:
             admittance_update(env, virtual, estimate, reference[k], dt)
         interaction, friction, voltage = plant_advance(
-            plant, law, x, applied, 0.0 if disabled else current_noise[k], voluntary[k], n_sub, h
+            plant, law, step, x, applied, 0.0 if disabled else current_noise[k], voluntary[k]
         )
         row = out[k]
         row[0] = ref

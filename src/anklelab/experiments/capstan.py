@@ -117,7 +117,7 @@ class CapstanSetup:
     observer_cutoff_hz: float = 20.0
     coupled: bool = True
     safety: SafetyLimits | None = None
-    max_step_s: float = 1e-4
+    max_step_s: float = 2e-4
 
     def resolved_gains(self) -> PIDGains:
         """The gains in use."""
@@ -202,13 +202,13 @@ def simulate_closed_loop(
 
     params = setup.params
     twin = setup.twin()
-    n_sub, h = twin.substeps(setup.fs)
     gains = setup.resolved_gains()
     if mode in ("impedance", "open-loop"):
         gains = gains.replace({"kp_nm_per_rad": 0.0, "ki_nm_per_rad_s": 0.0, "kd_nms_per_rad": 0.0})
     ctrl = control_constants(
         params,
         gains,
+        setup.fs,
         gravity_compensation=setup.gravity_compensation and mode != "open-loop",
         friction_compensation=0.0 if mode == "open-loop" else setup.friction_compensation,
         friction=setup.model_friction,
@@ -236,9 +236,7 @@ def simulate_closed_loop(
         FAULTS[fault.kind] if fault else 0,
         round(fault.time_s * setup.fs) if fault else 0,
         fault.value if fault else 0.0,
-        setup.fs,
-        n_sub,
-        h,
+        twin.stepping(setup.fs),
         params.encoder.resolution_rad,
     )
     meta = {"mode": mode, "fs": setup.fs, "fault": fault.kind if fault else "none"}

@@ -41,7 +41,7 @@ from anklelab.errors import NotFittedError, ParameterError, SessionFormatError
 from anklelab.experiments.capstan_ident import IdentData, IdentRun
 from anklelab.platforms.capstan import FrictionParameters
 from anklelab.signals.metrics import vaf
-from anklelab.sim.capstan.friction import friction_step, friction_torque
+from anklelab.sim.capstan.friction import friction_array, friction_step, friction_torque
 
 __all__ = ["FrictionIdentifier", "SpindownFit", "read_friction_json"]
 
@@ -120,12 +120,6 @@ def _simulate_angle(torque, fs, law, inertia, w0, n_sub):  # type: ignore[no-unt
             q += h * w
         angle[k + 1] = q
     return angle
-
-
-def _law(
-    tc: dict[str, float], b: dict[str, float], ts: float, ws: float, sigma: float
-) -> NDArray[np.float64]:
-    return np.array([tc["cw"], tc["ccw"], b["cw"], b["ccw"], ts, ws, sigma])
 
 
 class FrictionIdentifier:
@@ -405,13 +399,7 @@ class FrictionIdentifier:
         report it (mean over each sample interval), starting at ``velocity0``."""
         self._fitted()
         torque = np.ascontiguousarray(torque_nm, dtype=float)
-        law = _law(
-            self.coulomb_nm_,
-            self.viscous_nms_per_rad_,
-            self.static_friction_nm_,
-            self.stribeck_velocity_rad_s_,
-            self.stribeck_exponent,
-        )
+        law = friction_array(self.to_parameters())
         angle = _simulate_angle(torque, fs, law, self.inertia_kgm2_, velocity0, self.substeps)
         return np.r_[velocity0, np.diff(angle) * fs]
 

@@ -10,37 +10,62 @@ rest friction is set-valued: it takes whatever value in ``[-Ts, Ts]`` keeps the 
 :func:`friction_step` integrates ``J w' = T - F(w)`` over one step implicitly in the friction, so
 a shaft that reaches zero speed under a torque below ``Ts`` stops exactly and stays stopped.
 
-The law is passed to compiled code as the array :func:`friction_array` builds:
-``[Tc_cw, Tc_ccw, b_cw, b_ccw, Ts, ws, sigma]``.
+The law is passed to compiled code as the array :func:`friction_array` builds.
 """
 
 from __future__ import annotations
+
+import math
 
 import numpy as np
 from numba import njit
 from numpy.typing import ArrayLike, NDArray
 
 from anklelab.platforms.capstan import FrictionParameters
+from anklelab.sim.capstan._jit import FAST
 
 __all__ = ["friction_array", "friction_step", "friction_torque", "kinetic_friction"]
 
+NEGLIGIBLE_NM = 1e-14
+
 
 def friction_array(friction: FrictionParameters) -> NDArray[np.float64]:
-    """Pack friction parameters as ``[Tc_cw, Tc_ccw, b_cw, b_ccw, Ts, ws, sigma]`` (SI)."""
+    """Pack friction parameters for compiled code (SI).
+
+    Returns ``[Tc_cw, Tc_ccw, b_cw, b_ccw, Ts, ws, sigma, w_negligible]``, the last being the
+    speed above which the Stribeck term is below 1e-14 N·m.
+    """
+    f = friction
+    excess = max(
+        abs(f.static_friction_nm - f.coulomb_cw_nm), abs(f.static_friction_nm - f.coulomb_ccw_nm)
+    )
+    negligible = (
+        f.stribeck_velocity_rad_s * math.log(excess / NEGLIGIBLE_NM) ** (1.0 / f.stribeck_exponent)
+        if excess > NEGLIGIBLE_NM
+        else 0.0
+    )
     return np.array(
         [
-            friction.coulomb_cw_nm,
-            friction.coulomb_ccw_nm,
-            friction.viscous_cw_nms_per_rad,
-            friction.viscous_ccw_nms_per_rad,
-            friction.static_friction_nm,
-            friction.stribeck_velocity_rad_s,
-            friction.stribeck_exponent,
+            f.coulomb_cw_nm,
+            f.coulomb_ccw_nm,
+            f.viscous_cw_nms_per_rad,
+            f.viscous_ccw_nms_per_rad,
+            f.static_friction_nm,
+            f.stribeck_velocity_rad_s,
+            f.stribeck_exponent,
+            negligible,
         ]
     )
 
 
-@njit(cache=True)
+@njit(cache=True, fastmath=FAST)
+def _decay(speed: float, law: NDArray[np.float64]) -> float:
+    """Stribeck decay ``exp(-(speed / ws)^sigma)`` for ``speed >= 0`` (sigma = 2 fast path)."""
+    ratio = speed / law[5]
+    return np.exp(-(ratio * ratio if law[6] == 2.0 else ratio ** law[6]))
+
+
+@njit(cache=True, fastmath=FAST)
 def kinetic_friction(w: float, law: NDArray[np.float64]) -> float:
     """Kinetic friction torque at speed ``w`` (N·m, opposing motion; 0 at ``w == 0``)."""
     if w > 0.0:
@@ -49,11 +74,10 @@ def kinetic_friction(w: float, law: NDArray[np.float64]) -> float:
         tc, b, s = law[1], law[3], -1.0
     else:
         return 0.0
-    stribeck = (law[4] - tc) * np.exp(-((abs(w) / law[5]) ** law[6]))
-    return s * (tc + stribeck) + b * w
+    return s * (tc + (law[4] - tc) * _decay(abs(w), law)) + b * w
 
 
-@njit(cache=True)
+@njit(cache=True, fastmath=FAST)
 def friction_step(
     w: float, torque: float, inertia: float, h: float, law: NDArray[np.float64]
 ) -> tuple[float, float]:
@@ -85,21 +109,39 @@ def friction_step(
     s = 1.0 if w_free > 0.0 else -1.0
     tc, b = (law[0], law[2]) if s > 0.0 else (law[1], law[3])
     target = inertia * abs(w_free)
-    # g(v) = J v + h F(s v) s - J |w_free| is increasing in v > 0 with g(0+) < 0 <= g(hi)
-    lo, hi = 0.0, (target - h * min(tc, law[4])) / (inertia + h * b)
-    v = hi
-    for _ in range(40):
-        e = np.exp(-((v / law[5]) ** law[6]))
-        g = inertia * v + h * (tc + (law[4] - tc) * e + b * v) - target
+    stribeck = law[4] - tc
+    denominator = inertia + h * b
+    # g(v) = J v + h F(s v) s - J |w_free| is increasing in v > 0; its root lies in [lo, hi]
+    lo = max(0.0, (target - h * max(tc, law[4])) / denominator)
+    hi = (target - h * min(tc, law[4])) / denominator
+    v = (target - h * tc) / denominator  # the root without the Stribeck term
+    if v > law[7]:
+        return s * v, torque - inertia * (s * v - w) / h  # Stribeck term negligible here
+    # safeguarded Newton from there; h F' << J makes it converge in a step or two, and a step
+    # is final when its quadratic error estimate |g''| step^2 / (2 |g'|) is below 1e-9 rad/s
+    v = min(max(v, lo), hi)
+    sigma, ws = law[6], law[5]
+    for _ in range(60):
+        e = _decay(v, law)
+        g = denominator * v + h * (tc + stribeck * e) - target
+        if g == 0.0:
+            break
         if g > 0.0:
             hi = v
         else:
             lo = v
-        if abs(g) <= 1e-13 * target:
-            break
-        slope = inertia + h * (b - (law[4] - tc) * e * law[6] * (v / law[5]) ** law[6] / v)
-        v_next = v - g / slope
-        v = v_next if lo < v_next < hi else 0.5 * (lo + hi)
+        r = v / ws
+        rs = r if sigma == 2.0 else r ** (sigma - 1.0)  # r^(sigma-1)
+        slope = denominator - h * stribeck * e * sigma * rs / ws
+        step = g / slope
+        v_next = v - step
+        v = v_next if lo <= v_next <= hi else 0.5 * (lo + hi)
+        if v == v_next:
+            curvature = (
+                h * stribeck * e * sigma * (sigma * rs * rs - (sigma - 1.0) * rs / r) / ws**2
+            )
+            if abs(curvature) * step * step <= 2e-9 * abs(slope) * (1.0 + v):
+                break
     w_new = s * v
     return w_new, torque - inertia * (w_new - w) / h
 

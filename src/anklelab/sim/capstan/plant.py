@@ -27,9 +27,18 @@ from numba import njit
 from numpy.typing import NDArray
 
 from anklelab.platforms.capstan import CapstanParameters, UserParameters
+from anklelab.sim.capstan._jit import FAST
 from anklelab.sim.capstan.friction import friction_step
 
-__all__ = ["STATE_NAMES", "PlantConstants", "encoder_angle", "plant_advance", "plant_constants"]
+__all__ = [
+    "STATE_NAMES",
+    "PlantConstants",
+    "Stepping",
+    "encoder_angle",
+    "plant_advance",
+    "plant_constants",
+    "stepping",
+]
 
 STATE_NAMES = ("current_a", "pinion_angle_rad", "pinion_speed_rad_s", "angle_rad", "speed_rad_s")
 GRAVITY_M_S2 = 9.81
@@ -119,18 +128,49 @@ def plant_constants(
     )
 
 
-@njit(cache=True)
+class Stepping(NamedTuple):
+    """Sub-steps of one control period and per-step coefficients (built by :func:`stepping`)."""
+
+    n_sub: int
+    h: float
+    decay: float  # exp(-h R / L): the winding current's decay over a sub-step
+    lag: float  # 1 - exp(-h w_c): the current loop's progress over a sub-step
+    volts_per_amp: float  # R / (1 - decay)
+    amps_per_volt: float  # (1 - decay) / R
+    platform_rate: float  # h / platform inertia
+    foot_rate: float  # foot inertia / h
+
+
+def stepping(c: PlantConstants, fs: float, max_step_s: float) -> Stepping:
+    """Split a control period at ``fs`` Hz into equal sub-steps no longer than ``max_step_s``."""
+    if not fs > 0 or not max_step_s > 0:
+        raise ValueError(f"fs and max_step_s must be > 0; got {fs}, {max_step_s}")
+    n_sub = max(1, math.ceil(1.0 / (fs * max_step_s) - 1e-9))
+    h = 1.0 / (fs * n_sub)
+    decay = math.exp(-h * c.resistance / c.inductance)
+    return Stepping(
+        n_sub=n_sub,
+        h=h,
+        decay=decay,
+        lag=-math.expm1(-h * c.current_bandwidth),
+        volts_per_amp=c.resistance / (1.0 - decay),
+        amps_per_volt=(1.0 - decay) / c.resistance,
+        platform_rate=h / c.platform_inertia,
+        foot_rate=c.foot_inertia / h,
+    )
+
+
+@njit(cache=True, fastmath=FAST)
 def plant_advance(
     c: PlantConstants,
     law: NDArray[np.float64],
+    step: Stepping,
     x: NDArray[np.float64],
     current_command: float,
     current_offset: float,
     voluntary_torque: float,
-    n_sub: int,
-    h: float,
 ) -> tuple[float, float, float]:
-    """Advance the plant state ``x`` in place by ``n_sub`` sub-steps of ``h`` seconds.
+    """Advance the plant state ``x`` in place by one control period (``step.n_sub`` sub-steps).
 
     Parameters
     ----------
@@ -138,6 +178,8 @@ def plant_advance(
         From :func:`plant_constants`.
     law : ndarray
         Friction law, :func:`~anklelab.sim.capstan.friction.friction_array`.
+    step : Stepping
+        From :func:`stepping`.
     x : ndarray, shape (5,)
         State (see the module docstring), updated in place.
     current_command : float
@@ -147,8 +189,6 @@ def plant_advance(
         current, so the real one is off by this much).
     voluntary_torque : float
         The user's voluntary ankle torque on the platform, N·m (dorsiflexing positive).
-    n_sub, h : int, float
-        Number and length (s) of the sub-steps.
 
     Returns
     -------
@@ -159,20 +199,19 @@ def plant_advance(
     voltage : float
         Mean motor voltage, V.
     """
-    decay = np.exp(-h * c.resistance / c.inductance)
-    lag = 1.0 - np.exp(-h * c.current_bandwidth)
+    h, decay, lag = step.h, step.decay, step.lag
     target = min(max(current_command, -c.current_limit), c.current_limit)
     i, qp, wp, q, w = x[0], x[1], x[2], x[3], x[4]
     sum_interaction = 0.0
     sum_friction = 0.0
     sum_voltage = 0.0
-    for _ in range(n_sub):
+    for _ in range(step.n_sub):
         emf = c.back_emf * c.gear_ratio * wp
         sensed = i + current_offset
         wanted = sensed + lag * (target - sensed) - current_offset
-        v = c.resistance * (wanted - decay * i) / (1.0 - decay) + emf
+        v = step.volts_per_amp * (wanted - decay * i) + emf
         v = min(max(v, -c.supply_voltage), c.supply_voltage)
-        i = decay * i + (1.0 - decay) * (v - emf) / c.resistance
+        i = decay * i + step.amps_per_volt * (v - emf)
         tension_difference = 0.0
         if c.coupled > 0.0:
             stretch = c.pinion_radius * qp - c.pulley_radius * q
@@ -196,14 +235,15 @@ def plant_advance(
                 torque -= c.stop_stiffness * (q - c.angle_limit) + c.stop_damping * w
             elif q < -c.angle_limit:
                 torque -= c.stop_stiffness * (q + c.angle_limit) + c.stop_damping * w
-            w_new = w + h * torque / c.platform_inertia
-            sum_interaction += ankle - c.foot_inertia * (w_new - w) / h
+            w_new = w + step.platform_rate * torque
+            sum_interaction += ankle - step.foot_rate * (w_new - w)
             w = w_new
             q += h * w
         sum_friction += friction
         sum_voltage += v
     x[0], x[1], x[2], x[3], x[4] = i, qp, wp, q, w
-    return sum_interaction / n_sub, sum_friction / n_sub, sum_voltage / n_sub
+    n = step.n_sub
+    return sum_interaction / n, sum_friction / n, sum_voltage / n
 
 
 @njit(cache=True)

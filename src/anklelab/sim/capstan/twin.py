@@ -2,8 +2,6 @@
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
 from numba import njit
 from numpy.typing import ArrayLike, NDArray
@@ -14,8 +12,10 @@ from anklelab.sim.capstan.friction import friction_array
 from anklelab.sim.capstan.plant import (
     STATE_NAMES,
     PlantConstants,
+    Stepping,
     plant_advance,
     plant_constants,
+    stepping,
 )
 from anklelab.sim.capstan.result import SimulationResult
 
@@ -51,7 +51,7 @@ class CapstanTwin:
         user: UserParameters | None = None,
         *,
         coupled: bool = True,
-        max_step_s: float = 1e-4,
+        max_step_s: float = 2e-4,
     ) -> None:
         if not max_step_s > 0:
             raise ValueError(f"max_step_s must be > 0; got {max_step_s}")
@@ -62,12 +62,9 @@ class CapstanTwin:
         self.constants: PlantConstants = plant_constants(self.params, user, coupled=coupled)
         self.friction_law: NDArray[np.float64] = friction_array(self.params.friction)
 
-    def substeps(self, fs: float) -> tuple[int, float]:
-        """Number and length (s) of physics sub-steps per control period at ``fs`` Hz."""
-        if not fs > 0:
-            raise ValueError(f"fs must be > 0 Hz; got {fs}")
-        n_sub = max(1, math.ceil(1.0 / (fs * self.max_step_s) - 1e-9))
-        return n_sub, 1.0 / (fs * n_sub)
+    def stepping(self, fs: float) -> Stepping:
+        """Sub-steps of a control period at ``fs`` Hz (see :func:`~.plant.stepping`)."""
+        return stepping(self.constants, fs, self.max_step_s)
 
     def gravity_torque(self, angle: ArrayLike) -> NDArray[np.float64]:
         """Torque the actuator must supply to hold the platform against gravity, N·m (eq. 3)."""
@@ -131,19 +128,17 @@ class CapstanTwin:
         noise = np.zeros(n) if current_noise is None else np.asarray(current_noise, float)
         if vol.shape != (n,) or noise.shape != (n,):
             raise ValueError("voluntary_torque_nm and current_noise must match current_a's length")
-        n_sub, h = self.substeps(fs)
         x0 = self.rest_state(angle0) if state0 is None else np.array(state0, dtype=float)
         if x0.shape != (len(STATE_NAMES),):
             raise ValueError(f"state0 must have shape ({len(STATE_NAMES)},); got {x0.shape}")
         states, extra = _open_loop(
             self.constants,
             self.friction_law,
+            self.stepping(fs),
             x0,
             command,
             noise,
             vol,
-            n_sub,
-            h,
         )
         signals = dict(zip(STATE_NAMES, states.T, strict=True))
         signals |= {
@@ -156,14 +151,14 @@ class CapstanTwin:
 
 
 @njit(cache=True)
-def _open_loop(c, law, x0, command, noise, voluntary, n_sub, h):  # type: ignore[no-untyped-def]
+def _open_loop(c, law, step, x0, command, noise, voluntary):  # type: ignore[no-untyped-def]
     n = len(command)
     x = x0.copy()
     states = np.empty((n, 5))
     extra = np.empty((n, 3))
     for k in range(n):
         extra[k, 0], extra[k, 1], extra[k, 2] = plant_advance(
-            c, law, x, command[k], noise[k], voluntary[k], n_sub, h
+            c, law, step, x, command[k], noise[k], voluntary[k]
         )
         states[k] = x
     return states, extra
