@@ -135,7 +135,7 @@ def new_observer_state() -> NDArray[np.float64]:
     return np.zeros(6)
 
 
-@njit(cache=True, fastmath=FAST)
+@njit(cache=True, fastmath=FAST, error_model="numpy")
 def observer_update(
     c: ObserverConstants, state: NDArray[np.float64], angle: float, current: float
 ) -> float:

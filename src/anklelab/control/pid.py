@@ -209,7 +209,7 @@ def new_control_state(angle: float = 0.0) -> NDArray[np.float64]:
     return np.array([0.0, angle, 0.0, 0.0])
 
 
-@njit(cache=True, fastmath=FAST)
+@njit(cache=True, fastmath=FAST, error_model="numpy")
 def friction_feedforward(c: ControlConstants, speed: float) -> float:
     """Modelled friction torque referred to the platform at platform speed ``speed``, N·m."""
     wp = c.capstan_ratio * speed
@@ -219,7 +219,7 @@ def friction_feedforward(c: ControlConstants, speed: float) -> float:
     return c.capstan_ratio * (tc * s + b * wp)
 
 
-@njit(cache=True, fastmath=FAST)
+@njit(cache=True, fastmath=FAST, error_model="numpy")
 def position_control_update(
     c: ControlConstants,
     state: NDArray[np.float64],

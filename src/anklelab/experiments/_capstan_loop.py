@@ -51,7 +51,7 @@ SIGNALS = (
 )
 
 
-@njit(cache=True, fastmath=FAST)
+@njit(cache=True, fastmath=FAST, error_model="numpy")
 def closed_loop(  # type: ignore[no-untyped-def]
     plant,
     law,

@@ -9,9 +9,11 @@ from anklelab.sim.capstan.friction import (
 from anklelab.sim.capstan.plant import (
     STATE_NAMES,
     PlantConstants,
+    Stepping,
     encoder_angle,
     plant_advance,
     plant_constants,
+    stepping,
 )
 from anklelab.sim.capstan.result import SimulationResult
 from anklelab.sim.capstan.transfer import (
@@ -31,6 +33,7 @@ __all__ = [
     "LinearPlatform",
     "PlantConstants",
     "SimulationResult",
+    "Stepping",
     "ankle_torque_to_motor_speed",
     "disturbance_to_angle",
     "encoder_angle",
@@ -42,6 +45,7 @@ __all__ = [
     "plant_advance",
     "plant_constants",
     "reference_to_angle",
+    "stepping",
     "voltage_to_motor_speed",
     "voluntary_torque",
 ]

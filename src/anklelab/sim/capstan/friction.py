@@ -58,14 +58,14 @@ def friction_array(friction: FrictionParameters) -> NDArray[np.float64]:
     )
 
 
-@njit(cache=True, fastmath=FAST)
+@njit(cache=True, fastmath=FAST, error_model="numpy")
 def _decay(speed: float, law: NDArray[np.float64]) -> float:
     """Stribeck decay ``exp(-(speed / ws)^sigma)`` for ``speed >= 0`` (sigma = 2 fast path)."""
     ratio = speed / law[5]
     return np.exp(-(ratio * ratio if law[6] == 2.0 else ratio ** law[6]))
 
 
-@njit(cache=True, fastmath=FAST)
+@njit(cache=True, fastmath=FAST, error_model="numpy")
 def kinetic_friction(w: float, law: NDArray[np.float64]) -> float:
     """Kinetic friction torque at speed ``w`` (N·m, opposing motion; 0 at ``w == 0``)."""
     if w > 0.0:
@@ -77,7 +77,7 @@ def kinetic_friction(w: float, law: NDArray[np.float64]) -> float:
     return s * (tc + (law[4] - tc) * _decay(abs(w), law)) + b * w
 
 
-@njit(cache=True, fastmath=FAST)
+@njit(cache=True, fastmath=FAST, error_model="numpy")
 def friction_step(
     w: float, torque: float, inertia: float, h: float, law: NDArray[np.float64]
 ) -> tuple[float, float]:

@@ -160,7 +160,7 @@ def stepping(c: PlantConstants, fs: float, max_step_s: float) -> Stepping:
     )
 
 
-@njit(cache=True, fastmath=FAST)
+@njit(cache=True, fastmath=FAST, error_model="numpy")
 def plant_advance(
     c: PlantConstants,
     law: NDArray[np.float64],
