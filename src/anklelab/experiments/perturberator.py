@@ -62,7 +62,7 @@ from anklelab.platforms.perturberator import PerturberatorParameters
 from anklelab.sim.artefacts import Artefacts
 from anklelab.sim.drivetrain import FootLoad, simulate_platform
 from anklelab.sim.foot import FootModel, NominalStance, bench_law, foot_load, foot_model
-from anklelab.sim.gait import heel_contact_times, sample_gait, stance_signals
+from anklelab.sim.gait import heel_contact_times, sample_gait, stance_signals, vertical_force
 from anklelab.sim.sensors import (
     force_channels,
     goniometer_reading,
@@ -273,14 +273,17 @@ def _walking(
     heel_contact = heel_contact_times(trials, gait, walk.heel_contact_threshold_n)
     # the microcontroller's trigger and delay counter, on the force at its update instants
     updates = setup.plan.update_times(gait.trial_duration_s)
-    fz_updates = stance_signals(trials, gait, updates).grf_z
+    rate = setup.plan.update_rate_hz
+    first_update = np.floor(trials.contact_s * rate).astype(np.int64)  # loading phase only
+    window = first_update[:, None] + np.arange(int(np.ceil(trials.loading_s.max() * rate)) + 2)
+    fz_updates = vertical_force(trials, gait, window / rate)
     limit = walk.heel_contact_threshold_n - 5.0
     offset = np.zeros(n_trials)
     counter = np.zeros(n_trials)
     if art.onset_jitter:
         offset = np.clip(p.trigger.input_offset_sd_n * rng.standard_normal(n_trials), -limit, limit)
         counter = p.trigger.counter_error_sd_fraction * rng.standard_normal(n_trials)
-    trigger = trigger_updates(fz_updates, walk.heel_contact_threshold_n, offset)
+    trigger = first_update + trigger_updates(fz_updates, walk.heel_contact_threshold_n, offset)
     k_on = onset_updates(
         trigger, np.nan_to_num(delays) / 1000.0, setup.plan.update_rate_hz, counter
     )
@@ -375,6 +378,7 @@ def _reference(
     window_ms = setup.params.walking.window_ms
     width = round(window_ms * setup.fs / 1000)
     fs = setup.fs
+    pert_rate = np.gradient(pert, 1 / fs, axis=1)
     out: dict[str, dict[str, dict[str, float]]] = {}
     for sign, direction in ((1.0, "dorsi"), (-1.0, "plantar")):
         out[direction] = {}
@@ -386,7 +390,7 @@ def _reference(
             cols = first[:, None] + np.arange(width)
             rows = idx[:, None]
             theta = pert[rows, cols]
-            rate = np.gradient(pert, 1 / fs, axis=1)[rows, cols]
+            rate = pert_rate[rows, cols]
             w = theta**2
             wr = rate**2
             cop = np.sum(w * nominal.lever_arm_m[rows, cols], axis=1) / w.sum(axis=1)

@@ -10,6 +10,7 @@ from anklelab.sim.gait import (
     heel_contact_times,
     sample_gait,
     stance_signals,
+    vertical_force,
 )
 
 __all__ = [
@@ -30,4 +31,5 @@ __all__ = [
     "sample_gait",
     "simulate_platform",
     "stance_signals",
+    "vertical_force",
 ]

@@ -26,7 +26,14 @@ from scipy.interpolate import PchipInterpolator
 
 from anklelab.platforms.perturberator import GaitParameters
 
-__all__ = ["GaitTrials", "StanceSignals", "heel_contact_times", "sample_gait", "stance_signals"]
+__all__ = [
+    "GaitTrials",
+    "StanceSignals",
+    "heel_contact_times",
+    "sample_gait",
+    "stance_signals",
+    "vertical_force",
+]
 
 GRAVITY = 9.81
 
@@ -123,6 +130,13 @@ def _vertical(s: NDArray, trials: GaitTrials, params: GaitParameters) -> NDArray
     weight = params.body_mass_kg * GRAVITY * trials.amplitude[:, None]
     shape = params.vertical_base_bw + params.vertical_hump_bw * humps
     return weight * _envelope(s, trials, params) * shape
+
+
+def vertical_force(
+    trials: GaitTrials, params: GaitParameters, time_s: NDArray[np.float64]
+) -> NDArray[np.float64]:
+    """Vertical GRF of each trial at its own times ``time_s`` (shape (n_trials, n)), N."""
+    return _vertical(np.asarray(time_s) - trials.contact_s[:, None], trials, params)
 
 
 def stance_signals(
