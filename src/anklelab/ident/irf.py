@@ -153,23 +153,29 @@ class ImpulseResponse:
         -------
         ndarray, shape (..., n_outputs, n_times)
         """
-        irf = self._fitted()
-        u = _as_batch(u, "u")
-        if u.shape[-2] != irf.shape[1]:
-            raise ParameterError(f"u: expected {irf.shape[1]} inputs, got {u.shape[-2]}")
-        n = u.shape[-1]
-        nfft = next_fast_len(n + irf.shape[-1] - 1, real=True)
-        spectrum = np.einsum("...if,oif->...of", rfft(u, nfft), rfft(irf, nfft))
-        return irfft(spectrum, nfft)[..., :n]
+        return _filter(u, _irf(self))
 
     def score(self, u: ArrayLike, y: ArrayLike) -> float:
         """Mean over records of the VAF pooled over output channels, %."""
         return float(np.mean(vaf(_as_batch(y, "y"), self.predict(u), pool=-2)))
 
-    def _fitted(self) -> NDArray[np.float64]:
-        if not hasattr(self, "irf_"):
-            raise NotFittedError(f"{type(self).__name__} is not fitted yet; call fit() first")
-        return self.irf_
+
+def _irf(estimator: ImpulseResponse | PlatformFilters) -> NDArray[np.float64]:
+    """The fitted filters, or :class:`NotFittedError` naming the estimator's class."""
+    if not hasattr(estimator, "irf_"):
+        raise NotFittedError(f"{type(estimator).__name__} is not fitted yet; call fit() first")
+    return estimator.irf_
+
+
+def _filter(u: ArrayLike, irf: NDArray[np.float64]) -> NDArray[np.float64]:
+    """Causal FIR filtering of every record at once (FFT), zero initial conditions."""
+    u = _as_batch(u, "u")
+    if u.shape[-2] != irf.shape[1]:
+        raise ParameterError(f"u: expected {irf.shape[1]} inputs, got {u.shape[-2]}")
+    n = u.shape[-1]
+    nfft = next_fast_len(n + irf.shape[-1] - 1, real=True)
+    spectrum = np.einsum("...if,oif->...of", rfft(u, nfft), rfft(irf, nfft))
+    return irfft(spectrum, nfft)[..., :n]
 
 
 def _correlations(
@@ -309,7 +315,6 @@ class PlatformFilters:
         est = ImpulseResponse(self.n_lags, method=self.method)
         est.fit(self.input_signals(motor_angle, fs), self._filtered(forces, fs))
         self.irf_, self.order_, self.fs_ = est.irf_, est.order_, float(fs)
-        self._estimator = est
         return self
 
     def _check_forces(self, forces: ArrayLike) -> NDArray[np.float64]:
@@ -324,14 +329,28 @@ class PlatformFilters:
     def _filtered(self, forces: NDArray[np.float64], fs: float) -> NDArray[np.float64]:
         return lowpass(forces, fs, self.cutoff_hz, order=self.filter_order)
 
-    def predict(self, motor_angle: ArrayLike) -> NDArray[np.float64]:
-        """Platform force transients (low-pass domain), shape ``(..., n_channels, n_times)``, N.
+    def predict(
+        self, motor_angle: ArrayLike, *, combine: ArrayLike | None = None
+    ) -> NDArray[np.float64]:
+        """Platform force transients (low-pass domain), N.
 
-        ``motor_angle`` must be relative to the platform's resting angle (the angle pathway
-        predicts no force at rest).
+        Parameters
+        ----------
+        motor_angle : array_like, shape (..., n_times)
+            Motor angle relative to the platform's resting angle, rad (the angle pathway
+            predicts no force at rest).
+        combine : array_like, shape (n_combinations, n_channels), optional
+            Predict these linear combinations of the channels instead of every channel (e.g.
+            the sagittal resultants; cheaper when there are fewer combinations than channels).
+
+        Returns
+        -------
+        ndarray, shape (..., n_channels or n_combinations, n_times)
         """
-        est = self._fitted()
-        return est.predict(self.input_signals(motor_angle, self.fs_))
+        irf = _irf(self)
+        if combine is not None:
+            irf = np.einsum("mc,cil->mil", np.asarray(combine, dtype=float), irf)
+        return _filter(self.input_signals(motor_angle, self.fs_), irf)
 
     def vaf(
         self, motor_angle: ArrayLike, forces: ArrayLike
@@ -351,26 +370,17 @@ class PlatformFilters:
         by_channel : ndarray, shape (..., n_channels)
             Each channel's own VAF per record, %.
         """
-        est = self._fitted()
         measured = self._filtered(self._check_forces(forces), self.fs_)
-        predicted = est.predict(self.input_signals(motor_angle, self.fs_))
+        predicted = self.predict(motor_angle)
         return vaf(measured, predicted, pool=-2), vaf(measured, predicted)
 
     def score(self, motor_angle: ArrayLike, forces: ArrayLike) -> float:
         """Mean over records of the pooled VAF, %."""
         return float(np.mean(self.vaf(motor_angle, forces)[0]))
 
-    def _fitted(self) -> ImpulseResponse:
-        if not hasattr(self, "irf_"):
-            raise NotFittedError(f"{type(self).__name__} is not fitted yet; call fit() first")
-        if not hasattr(self, "_estimator"):
-            self._estimator = ImpulseResponse(self.n_lags, method=self.method)
-            self._estimator.irf_ = self.irf_
-        return self._estimator
-
     def to_dict(self, **extra: Any) -> dict[str, Any]:
         """JSON-ready description of the fitted filters (``extra`` keys are added)."""
-        self._fitted()
+        _irf(self)
         return {
             "format": FILTERS_FORMAT,
             "anklelab_version": __version__,

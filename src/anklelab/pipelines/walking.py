@@ -26,7 +26,7 @@ trial manifest); no number of the digital twin is assumed.
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Literal
 
@@ -41,6 +41,7 @@ from anklelab.errors import ParameterError, SessionFormatError
 from anklelab.forceplate import (
     CHANNELS,
     PlateGeometry,
+    SagittalLoad,
     ankle_torque,
     resultants,
     sagittal_load,
@@ -77,6 +78,7 @@ STANCE_CHANNELS = ("angle", "velocity", "acceleration", "torque", "dx", "grf_z",
 _KIN = [0, 1, 2]
 _ANGLE, _TORQUE, _DX = 0, 3, 4
 _DIRECTIONS = ("dorsi", "plantar")
+_MIN_FZ_N = 1.0  # below this vertical force the COP is undefined (forceplate.resultants' default)
 
 
 class WalkingSettings(Parameters):
@@ -425,11 +427,12 @@ def _stance_trials(session: Session, settings: WalkingSettings, filters: Platfor
         [w.recording for w in walking], ("motor_angle", "ankle_angle", *CHANNELS)
     )
     n_base = max(1, round(settings.baseline_ms * fs / 1000.0))
-    zeroed = [0, *range(2, raw.shape[1])]  # motor angle and force channels
-    raw[:, zeroed] -= raw[:, zeroed, :n_base].mean(axis=-1, keepdims=True)
-    motor, channels = raw[:, 0], raw[:, 2:]
+    raw -= raw[..., :n_base].mean(axis=-1, keepdims=True)  # the ankle angle is re-zeroed later
+    motor = raw[:, 0]
+    sagittal = _sagittal_matrix(info.force_plate)
+    load_raw = np.einsum("sc,nct->nst", sagittal, raw[:, 2:])  # grf_x, grf_z, grf_z * cop_x
     contact = heel_contact(
-        channels[:, 4:].sum(axis=1),
+        load_raw[:, 1],
         fs,
         settings.heel_contact_threshold_n,
         hold_ms=settings.heel_contact_hold_ms,
@@ -438,15 +441,19 @@ def _stance_trials(session: Session, settings: WalkingSettings, filters: Platfor
     rows = np.arange(len(walking))
 
     lp = {"fs": fs, "cutoff_hz": settings.cutoff_hz, "order": settings.filter_order}
-    forces = lowpass(channels, **lp) - filters.predict(motor)
-    load = sagittal_load(resultants(forces, info.force_plate), info.force_plate.anterior_axis)
-    cop0 = _cop_at_contact(channels, event, fs, settings.contact_cop_ms, info.force_plate)
+    grf_x, grf_z, moment = np.moveaxis(
+        lowpass(load_raw, **lp) - filters.predict(motor, combine=sagittal), 1, 0
+    )
+    with np.errstate(invalid="ignore", divide="ignore"):
+        cop_x = np.where(np.abs(grf_z) > _MIN_FZ_N, moment / grf_z, np.nan)
+    cop0 = _cop_at_contact(load_raw[:, 1], load_raw[:, 2], event, fs, settings.contact_cop_ms)
     cop_defined = np.isfinite(cop0)
-    cop_x = load.cop_x.copy()
     cop_x[rows, event] = np.where(cop_defined, cop0, 0.0)  # ankle_torque zeroes the COP here
-    load = replace(load, cop_x=cop_x)
     torque, dx = ankle_torque(
-        load, event, heel_to_ankle_m=info.heel_to_ankle_m, ankle_height_m=info.ankle_height_m
+        SagittalLoad(grf_x, grf_z, cop_x),
+        event,
+        heel_to_ankle_m=info.heel_to_ankle_m,
+        ankle_height_m=info.ankle_height_m,
     )
     ankle = lowpass(raw[:, 1], **lp)
     kin = kinematics(ankle - ankle[rows, event][:, None], fs, settings.derivative_window)
@@ -481,7 +488,7 @@ def _stance_trials(session: Session, settings: WalkingSettings, filters: Platfor
     usable = perturbed & np.array([not r for r in log])
     span = int(np.max(offset[usable], initial=0)) + _samples(max(settings.windows_ms()), fs)
     data = np.concatenate(
-        [kin, torque[:, None], dx[:, None], load.grf_z[:, None], motor[:, None]], axis=1
+        [kin, torque[:, None], dx[:, None], grf_z[:, None], motor[:, None]], axis=1
     )
     time0 = np.array([w.recording.time_s[0] for w in walking])
     metadata = {
@@ -510,30 +517,43 @@ def _stance_trials(session: Session, settings: WalkingSettings, filters: Platfor
     )
 
 
+def _sagittal_matrix(plate: PlateGeometry) -> NDArray[np.float64]:
+    """The (3, 8) map from force channels to ``(grf_x, grf_z, grf_z * cop_x)``.
+
+    All three are linear in the channels, so the walking trials are low-passed and corrected as
+    three signals instead of eight. The matrix is read off :mod:`anklelab.forceplate`'s own
+    functions by probing them with unit channel loads (on top of a vertical load, so the COP is
+    defined), which keeps every sign and mounting convention in that one module.
+    """
+    base = np.zeros(len(CHANNELS))
+    base[CHANNELS.index("fz1")] = 100.0
+    probes = np.vstack([base, base + np.eye(len(CHANNELS))])
+    load = sagittal_load(resultants(probes, plate, axis=-1), plate.anterior_axis)
+    values = np.stack([load.grf_x, load.grf_z, load.grf_z * load.cop_x])
+    return values[:, 1:] - values[:, :1]
+
+
 def _cop_at_contact(
-    channels: NDArray[np.float64],
+    grf_z: NDArray[np.float64],
+    moment: NDArray[np.float64],
     event: NDArray[np.int64],
     fs: float,
     span_ms: float,
-    plate: PlateGeometry,
 ) -> NDArray[np.float64]:
     """COP at heel contact: a line fitted to the raw COP over the first ``span_ms`` of contact.
 
     The low-pass would smear the force's sudden rise at heel strike over the following samples
-    and move the COP at contact forward; the raw COP is unbiased but noisy at small loads, so
-    the line is weighted by the vertical force squared (the COP's noise falls as 1/Fz).
+    and move the COP at contact forward; the raw COP (``moment / grf_z``) is unbiased but noisy
+    at small loads, so the line is weighted by ``grf_z**2`` (the COP's noise falls as 1/Fz),
+    which also makes every term a product of the raw signals (no division).
     """
     n = max(2, round(span_ms * fs / 1000.0))
-    index = np.minimum(event[:, None] + np.arange(n), channels.shape[-1] - 1)
-    rows = np.arange(channels.shape[0])[:, None, None]
-    window = channels[rows, np.arange(channels.shape[1])[:, None], index[:, None, :]]
-    load = sagittal_load(resultants(window, plate), plate.anterior_axis)
-    defined = np.isfinite(load.cop_x)
-    weight = np.where(defined, load.grf_z**2, 0.0)
-    cop = np.where(defined, load.cop_x, 0.0)
+    index = np.minimum(event[:, None] + np.arange(n), grf_z.shape[-1] - 1)
+    fz = np.take_along_axis(grf_z, index, axis=-1)
+    weight, weighted_cop = fz**2, fz * np.take_along_axis(moment, index, axis=-1)
     t = np.arange(n, dtype=float)
     s0, s1, s2 = weight.sum(-1), weight @ t, weight @ t**2
-    c0, c1 = (weight * cop).sum(-1), (weight * cop) @ t
+    c0, c1 = weighted_cop.sum(-1), weighted_cop @ t
     with np.errstate(invalid="ignore", divide="ignore"):
         return (s2 * c0 - s1 * c1) / (s0 * s2 - s1**2)
 

@@ -1,0 +1,134 @@
+"""Walking impedance analysis of the default twin session vs a per-trial-loop implementation.
+
+The baseline is the same analysis written the straightforward way: every walking trial
+filtered, corrected and segmented on its own, the platform filters applied channel by channel
+with ``np.convolve``, and one ``np.linalg.lstsq`` per bootstrap repetition and window. It uses the
+same bootstrap subsets, so both must give the same numbers (checked).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from anklelab.forceplate import CHANNELS, ankle_torque, resultants, sagittal_load
+from anklelab.pipelines.walking import (
+    WalkingSettings,
+    _cop_at_contact,
+    analyze_walking,
+    fit_platform_filters,
+)
+from anklelab.signals import (
+    bootstrap_weights,
+    heel_contact,
+    kinematics,
+    lowpass,
+    perturbation_onset,
+)
+from benchmarks._harness import Result, compare
+
+
+def _trial(trial, info, settings, filters):
+    """One walking trial: (kinematics, torque, dx, onset offset) aligned at heel contact."""
+    fs = info.sample_rate_hz
+    rec = trial.recording
+    n_base = round(settings.baseline_ms * fs / 1000.0)
+    motor = rec["motor_angle"] - rec["motor_angle"][:n_base].mean()
+    channels = rec.stack(CHANNELS)
+    channels = channels - channels[:, :n_base].mean(axis=1, keepdims=True)
+    hc = int(heel_contact(channels[4:].sum(axis=0), fs, settings.heel_contact_threshold_n))
+    inputs = filters.input_signals(motor, fs)
+    predicted = np.array(
+        [
+            sum(
+                np.convolve(inputs[i], filters.irf_[c, i])[: motor.size] for i in range(len(inputs))
+            )
+            for c in range(len(CHANNELS))
+        ]
+    )
+    forces = lowpass(channels, fs, settings.cutoff_hz, order=settings.filter_order) - predicted
+    load = sagittal_load(resultants(forces, info.force_plate), info.force_plate.anterior_axis)
+    raw = sagittal_load(resultants(channels, info.force_plate), info.force_plate.anterior_axis)
+    cop_x = load.cop_x.copy()
+    cop_x[hc] = _cop_at_contact(
+        raw.grf_z[None],
+        (raw.grf_z * np.nan_to_num(raw.cop_x))[None],
+        np.array([hc]),
+        fs,
+        settings.contact_cop_ms,
+    )[0]
+    torque, dx = ankle_torque(
+        type(load)(load.grf_x, load.grf_z, cop_x),
+        hc,
+        heel_to_ankle_m=info.heel_to_ankle_m,
+        ankle_height_m=info.ankle_height_m,
+    )
+    ankle = lowpass(rec["ankle_angle"], fs, settings.cutoff_hz, order=settings.filter_order)
+    kin = kinematics(ankle - ankle[hc], fs, settings.derivative_window)
+    onset = perturbation_onset(motor, start=hc, min_amplitude_rad=settings.onset_min_amplitude_rad)
+    offset = round(float(onset.index)) - hc if trial.perturbed else 0
+    return np.vstack([kin, torque, dx])[:, hc:], offset
+
+
+def per_trial_loop(session, settings):
+    """The analysis trial by trial and repetition by repetition; stiffness by condition."""
+    filters, *_ = fit_platform_filters(session, settings)
+    fs = session.info.sample_rate_hz
+    trials = [_trial(t, session.info, settings, filters) for t in session.walking]
+    span = min(x.shape[1] for x, _ in trials)
+    none = [
+        x[:, :span] for (x, _), t in zip(trials, session.walking, strict=True) if not t.perturbed
+    ]
+    nominal = sum(none) / len(none)
+    rng = np.random.default_rng(settings.seed)
+    lengths = [round(w * fs / 1000.0) for w in settings.windows_ms()]
+    ref = round(settings.offset_reference_ms * fs / 1000.0)
+    keys = sorted(
+        {(t.direction, t.delay_ms) for t in session.walking if t.perturbed},
+        key=lambda k: (("dorsi", "plantar").index(k[0]), k[1]),
+    )
+    stiffness = {}
+    for direction, delay in keys:
+        responses = []
+        for (x, offset), t in zip(trials, session.walking, strict=True):
+            if t.perturbed and (t.direction, t.delay_ms) == (direction, delay):
+                r0 = max(offset - ref, 0)
+                window = slice(offset, offset + max(lengths))
+                response = x[:4, window] - nominal[:4, window]
+                response[[0, 3]] -= (x[[0, 3], r0] - nominal[[0, 3], r0])[:, None]
+                responses.append(response)
+        weights = bootstrap_weights(len(responses), settings.bootstrap_reps, 0.6, random_state=rng)
+        values = []
+        for w in weights:
+            average = sum(wi * r for wi, r in zip(w, responses, strict=True) if wi)
+            n = lengths[0]
+            coef = np.linalg.lstsq(average[:3, :n].T, average[3, :n], rcond=None)[0]
+            for m in lengths[1:]:
+                np.linalg.lstsq(average[:3, :m].T, average[3, :m], rcond=None)
+            values.append(coef[0])
+        stiffness[f"{direction}/{delay:g}"] = float(np.mean(values))
+    return stiffness
+
+
+def _session():
+    from anklelab.experiments import simulate_perturberator
+
+    return simulate_perturberator(seed=0)
+
+
+def run() -> list[Result]:
+    session = _session()
+    settings = WalkingSettings()
+    ours = analyze_walking(session, settings)
+    theirs = per_trial_loop(session, settings)
+    for tp in ours.timing_points:
+        assert np.isclose(np.mean(tp.stiffness), theirs[tp.key], rtol=1e-6), tp.key
+    n = len(session.walking)
+    return [
+        compare(
+            f"walking analysis: {n} trials, {len(ours.timing_points)} conditions",
+            lambda: analyze_walking(session, settings),
+            lambda: per_trial_loop(session, settings),
+            "per-trial / per-repetition loops",
+            repeat=3,
+        )
+    ]
