@@ -9,15 +9,27 @@ from anklelab.experiments.capstan import (
     simulate_closed_loop,
     step_response,
 )
+from anklelab.experiments.capstan_ident import (
+    IdentData,
+    IdentProtocol,
+    read_ident_directory,
+    simulate_ident,
+    write_ident_directory,
+)
 from anklelab.experiments.perturberator import simulate_perturberator
 
 __all__ = [
     "CapstanSetup",
     "FaultInjection",
+    "IdentData",
+    "IdentProtocol",
     "chirp_tracking",
     "observer_trial",
+    "read_ident_directory",
     "render",
     "simulate_closed_loop",
+    "simulate_ident",
     "simulate_perturberator",
     "step_response",
+    "write_ident_directory",
 ]
