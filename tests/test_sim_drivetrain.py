@@ -8,7 +8,7 @@ from anklelab.experiments import simulate_perturberator
 from anklelab.platforms import load_platform
 from anklelab.sim import _kernels as K
 from anklelab.sim.artefacts import Artefacts
-from anklelab.sim.drivetrain import FootLoad, platform_constants, simulate_platform
+from anklelab.sim.drivetrain import DriveFault, FootLoad, platform_constants, simulate_platform
 
 
 @pytest.fixture(scope="module")
@@ -104,3 +104,26 @@ def test_misaligned_hinge_rotates_the_ankle_more_than_the_plate(params):
     run = simulate_platform(shifted, ref, load=load, plate=False)
     gain = run.ankle_angle[0, -10] / run.hinge_angle[0, -10]
     assert gain == pytest.approx(1 + 0.045 / 0.45, rel=1e-6)
+
+
+def test_drive_trips_and_disables_its_output_on_faults(params):
+    t = np.arange(4000) / 8000.0
+    ramp = np.clip((t - 0.05) / 0.075, 0, 1)[None] * 0.035
+    lost = simulate_platform(params, ramp, plate=False, encoder_fault_s=np.array([0.1]))
+    assert lost.fault.tolist() == [DriveFault.ENCODER]
+    assert lost.fault_s[0] == pytest.approx(0.1)
+    torque = lost.motor_torque[0]
+    assert np.abs(torque[90:100]).min() > 1.0  # the drive was working the ramp
+    assert np.abs(torque[105:]).max() < 1e-3  # output disabled: the current decays to zero
+    jump = np.full((1, 4000), 0.1)  # a raw 0.1 rad step: following error above 0.05 rad
+    tripped = simulate_platform(params, jump, plate=False)
+    assert tripped.fault.tolist() == [DriveFault.FOLLOWING_ERROR]
+    assert np.abs(tripped.motor_angle).max() < 0.01
+    fine = simulate_platform(params, np.full((1, 400), 0.01), plate=False)
+    assert fine.fault.tolist() == [DriveFault.NONE] and np.isnan(fine.fault_s[0])
+
+
+def test_a_drive_fault_stops_the_protocol():
+    strict = load_platform("perturberator").replace({"servo.following_error_limit_rad": 1e-4})
+    with pytest.raises(SafetyLimitError, match=r"walking trial \d+: the drive tripped"):
+        simulate_perturberator(strict, trials_per_point=1, n_unperturbed=0, n_calibration=0)

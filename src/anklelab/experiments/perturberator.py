@@ -56,11 +56,12 @@ from anklelab.data.session import (
     SessionInfo,
     WalkingTrial,
 )
+from anklelab.errors import SafetyLimitError
 from anklelab.forceplate import CHANNELS, PlateGeometry
 from anklelab.platforms import load_platform
 from anklelab.platforms.perturberator import PerturberatorParameters
 from anklelab.sim.artefacts import Artefacts
-from anklelab.sim.drivetrain import FootLoad, simulate_platform
+from anklelab.sim.drivetrain import DriveFault, FootLoad, PlatformRun, simulate_platform
 from anklelab.sim.foot import FootModel, NominalStance, bench_law, foot_load, foot_model
 from anklelab.sim.gait import heel_contact_times, sample_gait, stance_signals, vertical_force
 from anklelab.sim.sensors import (
@@ -228,6 +229,7 @@ def _calibration(
     run = simulate_platform(
         setup.params, setup.reference(planned, n), artefacts=setup.art, substeps=setup.substeps
     )
+    _check_faults(run, "calibration", 0)
     assert run.wrench is not None
     channels = force_channels(run.wrench, setup.params, setup.art, rng)
     motor = motor_angle_output(run.motor_angle, setup.params, setup.art)
@@ -241,6 +243,16 @@ def _calibration(
         )
         for i in range(n_trials)
     )
+
+
+def _check_faults(run: PlatformRun, protocol: str, first: int) -> None:
+    """Stop the protocol, as the lab would, when the drive tripped in any trial."""
+    assert run.fault is not None and run.fault_s is not None
+    for i in np.flatnonzero(run.fault):
+        raise SafetyLimitError(
+            f"{protocol} trial {first + i + 1}: the drive tripped "
+            f"({DriveFault(int(run.fault[i])).name}) at {run.fault_s[i]:.4f} s"
+        )
 
 
 def _manifest(
@@ -310,6 +322,7 @@ def _walking(
             p, setup.reference(planned, n), load=sub, artefacts=art, substeps=setup.substeps,
             fork=fork,
         )  # fmt: skip
+        _check_faults(run, "walking", start)
         assert run.wrench is not None and run.snapshot is not None
         motor[b], angle[b], torque[b], wrench[b] = (
             run.motor_angle, run.ankle_angle, run.ankle_torque, run.wrench

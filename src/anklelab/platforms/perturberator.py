@@ -99,6 +99,8 @@ class ServoParameters(Parameters):
     velocity_gain_nms_per_rad: float = Positive
     velocity_integral_hz: float = NonNegative
     current_bandwidth_hz: float = Positive
+    velocity_limit_rad_per_s: float = Positive
+    following_error_limit_rad: float = Positive
 
 
 class MotionPlanParameters(Parameters):

@@ -2,7 +2,7 @@
 
 from anklelab.sim.artefacts import Artefacts
 from anklelab.sim.capstan import CapstanTwin, SimulationResult, linear_platform
-from anklelab.sim.drivetrain import FootLoad, PlatformRun, simulate_platform
+from anklelab.sim.drivetrain import DriveFault, FootLoad, PlatformRun, simulate_platform
 from anklelab.sim.foot import FootModel, NominalStance, bench_law, foot_load, foot_model
 from anklelab.sim.gait import (
     GaitTrials,
@@ -16,6 +16,7 @@ from anklelab.sim.gait import (
 __all__ = [
     "Artefacts",
     "CapstanTwin",
+    "DriveFault",
     "FootLoad",
     "FootModel",
     "GaitTrials",

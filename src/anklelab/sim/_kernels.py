@@ -26,7 +26,10 @@ from numba import njit
 # platform constants (pc)
 J_M, K_S, C_S, B_M, T_COUL, W_EPS, J_H, B_H, K_G, TAU_MAX, INV_TC = range(11)
 KPP, KVP, WI, ENC_Q, AZ0, X_H, H_H, M_T, I_T, X_T, Z_T, GRAV, DT = range(11, 24)
-N_PC = 24
+POS_MAX, VEL_MAX, FOLLOW_MAX = range(24, 27)
+N_PC = 27
+# drive faults (anklelab.sim.drivetrain.DriveFault)
+D_ENCODER, D_POSITION, D_VELOCITY, D_FOLLOWING = 1, 2, 3, 4
 # per-trial foot scalars (fp)
 F_IF, F_XA, F_DZ, F_MIS, F_KLEG, F_KSH, F_BSH = range(7)
 N_FP = 7
@@ -157,7 +160,7 @@ def _plate_wrench(s, d, ta, lx, lz, gv, pc, fp, inertia, c, sn, w):
 @njit(cache=True)
 def run_batch(
     pc, fp, g, gait_fs, ref, inj, flags, sos_v, sos_h, sos_aa, plate_every, rec_every,
-    span, resume, fork, mech, wrench, loop, snap,
+    span, resume, fork, enc_fault, mech, wrench, loop, snap, fault,
 ):  # fmt: skip
     """Simulate each trial of a batch; fills ``mech``, ``wrench`` and ``loop`` in place.
 
@@ -176,7 +179,13 @@ def run_batch(
     span : (n_trials, 2) first and end velocity step simulated.
     resume : (n_trials, N_SNAP) state at the first step (used with ``flags[FL_RESUME]``).
     fork : (n_trials,) step at whose start the state is copied into ``snap`` (-1: never).
+    enc_fault : (n_trials,) step from which the encoder reads NaN (-1: never), fault injection.
     mech, wrench : (n_trials, N_MECH | 6, n_rec) outputs; loop : (n_trials, 3, n_ticks) or empty.
+    fault : (n_trials, 2) output: the drive's latched fault code (``D_*``, 0 none) and step.
+
+    The drive disables its output (zero torque) from the step it detects a fault: a non-finite
+    encoder reading, the encoder beyond the angle limit, overspeed, or a following error above
+    its threshold.
     """
     n_trials, n_ticks = ref.shape
     n_steps = 2 * n_ticks
@@ -209,6 +218,7 @@ def run_batch(
         else:
             s[:] = 0.0
             integ, th0, flat, vcmd, tau_next, enc_prev = 0.0, 0.0, False, 0.0, 0.0, 0.0
+        code = 0
         j0 = span[n, 0]
         for j in range(j0, min(span[n, 1], n_steps)):
             t = j * dt
@@ -220,22 +230,40 @@ def run_batch(
             enc = s[1]
             if pc[ENC_Q] > 0.0:
                 enc = math.floor(s[1] / pc[ENC_Q] + 0.5) * pc[ENC_Q]
-            if j % 2 == 0:
-                i = j // 2
-                ctrl = pc[KPP] * (ref[n, i] - enc)
-                vcmd = ctrl + (inj[n, i] if has_inj else 0.0)
-                if flags[FL_LOOP] == 1:
-                    loop[n, L_ENC, i] = enc
-                    loop[n, L_CTRL, i] = ctrl
-                    loop[n, L_CMD, i] = vcmd
-            vel = (enc - enc_prev) / dt if j > 0 else 0.0
+            if 0 <= enc_fault[n] <= j:
+                enc = math.nan
+            vel = (enc - enc_prev) / dt if j > j0 else 0.0
+            if code == 0:
+                if not math.isfinite(enc):
+                    code = D_ENCODER
+                elif abs(enc) > pc[POS_MAX]:
+                    code = D_POSITION
+                elif abs(vel) > pc[VEL_MAX]:
+                    code = D_VELOCITY
+                elif j % 2 == 0 and abs(ref[n, j // 2] - enc) > pc[FOLLOW_MAX]:
+                    code = D_FOLLOWING
+                if code != 0:
+                    fault[n, 0] = code
+                    fault[n, 1] = j
+            if code != 0:  # output disabled: no torque, controller frozen
+                tau_cmd = 0.0
+                tau_next = 0.0
+            else:
+                if j % 2 == 0:
+                    i = j // 2
+                    ctrl = pc[KPP] * (ref[n, i] - enc)
+                    vcmd = ctrl + (inj[n, i] if has_inj else 0.0)
+                    if flags[FL_LOOP] == 1:
+                        loop[n, L_ENC, i] = enc
+                        loop[n, L_CTRL, i] = ctrl
+                        loop[n, L_CMD, i] = vcmd
+                err = vcmd - vel
+                raw = pc[KVP] * (err + integ)
+                if abs(raw) < pc[TAU_MAX] or raw * err < 0.0:
+                    integ += pc[WI] * err * dt
+                tau_cmd = tau_next  # one velocity-loop sample of computation delay
+                tau_next = min(max(raw, -pc[TAU_MAX]), pc[TAU_MAX])
             enc_prev = enc
-            err = vcmd - vel
-            raw = pc[KVP] * (err + integ)
-            if abs(raw) < pc[TAU_MAX] or raw * err < 0.0:
-                integ += pc[WI] * err * dt
-            tau_cmd = tau_next  # one velocity-loop sample of computation delay
-            tau_next = min(max(raw, -pc[TAU_MAX]), pc[TAU_MAX])
             # plant: RK4 sub-steps with the torque command held
             for q in range(n_sub):
                 tq = t + q * h

@@ -20,6 +20,7 @@ the hinge's tilt (sin, cos) are evaluated once per integration step.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from enum import IntEnum
 
 import numpy as np
 from numpy.typing import NDArray
@@ -30,9 +31,26 @@ from anklelab.sim import _kernels as K
 from anklelab.sim.artefacts import Artefacts
 from anklelab.sim.forceplate_dynamics import anti_alias_sos, mode_sos
 
-__all__ = ["GRAVITY", "FootLoad", "PlatformRun", "platform_constants", "simulate_platform"]
+__all__ = [
+    "GRAVITY",
+    "DriveFault",
+    "FootLoad",
+    "PlatformRun",
+    "platform_constants",
+    "simulate_platform",
+]
 
 GRAVITY = 9.81
+
+
+class DriveFault(IntEnum):
+    """Why the servo drive disabled its output (0: it did not)."""
+
+    NONE = 0
+    ENCODER = K.D_ENCODER  # non-finite (lost) position feedback
+    POSITION = K.D_POSITION  # beyond the hinge's angle limit
+    VELOCITY = K.D_VELOCITY  # overspeed
+    FOLLOWING_ERROR = K.D_FOLLOWING  # command minus encoder beyond its threshold
 
 
 @dataclass(frozen=True)
@@ -67,7 +85,8 @@ class PlatformRun:
     ``wrench`` (``(n_trials, 6, n_samples)``, or None) the plate load of
     :mod:`anklelab.sim.forceplate_dynamics`; ``loop`` (or None) the position loop's encoder,
     controller output and velocity command at the position-loop rate; ``snapshot`` (or None)
-    each trial's full state at its ``fork`` step, to resume from.
+    each trial's full state at its ``fork`` step, to resume from; ``fault`` each trial's latched
+    :class:`DriveFault` code and ``fault_s`` when it tripped (NaN if it did not).
     """
 
     fs: float
@@ -79,6 +98,8 @@ class PlatformRun:
     wrench: NDArray[np.float64] | None
     loop: dict[str, NDArray[np.float64]] | None
     snapshot: NDArray[np.float64] | None = None
+    fault: NDArray[np.int64] | None = None
+    fault_s: NDArray[np.float64] | None = None
 
 
 def platform_constants(
@@ -118,6 +139,9 @@ def platform_constants(
     pc[K.Z_T] = fp.top_plate_com_z_m
     pc[K.GRAV] = GRAVITY
     pc[K.DT] = 1.0 / sv.velocity_loop_rate_hz
+    pc[K.POS_MAX] = hg.angle_limit_rad
+    pc[K.VEL_MAX] = sv.velocity_limit_rad_per_s
+    pc[K.FOLLOW_MAX] = sv.following_error_limit_rad
     return pc
 
 
@@ -135,6 +159,7 @@ def simulate_platform(
     fork: NDArray[np.int64] | None = None,
     resume: tuple[NDArray[np.int64], NDArray[np.float64]] | None = None,
     stop: NDArray[np.int64] | None = None,
+    encoder_fault_s: NDArray[np.float64] | None = None,
 ) -> PlatformRun:
     """Run the servo-controlled hinge on a batch of position references.
 
@@ -167,6 +192,8 @@ def simulate_platform(
         samples before it are left at zero.
     stop : ndarray of int, shape (n_trials,), optional
         Velocity-loop step at which each trial ends (default: the end of ``reference``).
+    encoder_fault_s : ndarray, shape (n_trials,), optional
+        Fault injection: from this time (s; NaN for never) the encoder reads NaN.
 
     Returns
     -------
@@ -220,6 +247,11 @@ def simulate_platform(
         span[:, 0], start_state = resume[0], np.ascontiguousarray(resume[1], dtype=float)
     forks = np.full(n_trials, -1, dtype=np.int64) if fork is None else fork.astype(np.int64)
     snap = np.zeros((n_trials, K.N_SNAP))
+    enc_fault = np.full(n_trials, -1, dtype=np.int64)
+    if encoder_fault_s is not None:
+        lost = np.isfinite(encoder_fault_s)
+        enc_fault[lost] = np.round(encoder_fault_s[lost] * sv.velocity_loop_rate_hz)
+    fault = np.zeros((n_trials, 2), dtype=np.int64)
     n_rec = -(-2 * n_ticks // rec_every)
     mech = np.zeros((n_trials, K.N_MECH, n_rec))
     wrench = np.zeros((n_trials, K.N_WRENCH, n_rec if plate else 0))
@@ -227,7 +259,7 @@ def simulate_platform(
     K.run_batch(
         pc, np.ascontiguousarray(fp, dtype=float), np.ascontiguousarray(g, dtype=float),
         float(gait_fs), ref, np.ascontiguousarray(inj), flags, sos_v, sos_h, sos_aa,
-        2, rec_every, span, start_state, forks, mech, wrench, loop, snap,
+        2, rec_every, span, start_state, forks, enc_fault, mech, wrench, loop, snap, fault,
     )  # fmt: skip
     return PlatformRun(
         fs=fs_rec,
@@ -241,4 +273,6 @@ def simulate_platform(
         if record_loop
         else None,
         snapshot=snap if fork is not None else None,
+        fault=fault[:, 0],
+        fault_s=np.where(fault[:, 0] > 0, fault[:, 1] / sv.velocity_loop_rate_hz, np.nan),
     )
