@@ -11,6 +11,7 @@ from typing import Annotated, Any
 
 import numpy as np
 import typer
+from rich import box
 from rich.console import Console
 from rich.table import Table
 
@@ -68,27 +69,24 @@ def trials_table(session: Session, results: WalkingResults) -> list[dict[str, An
 
 
 def _summary(results: WalkingResults) -> Table:
-    table = Table(title="walking impedance (bootstrap mean ± sd)")
-    for column in (
-        "condition",
-        "n",
-        "cop (cm)",
-        "k (N·m/rad)",
-        "b (N·m·s/rad)",
-        "I (kg·m²)",
-        "VAF %",
-    ):
-        table.add_column(column, justify="right")
+    table = Table(
+        box=box.SIMPLE_HEAD,
+        title="walking impedance, bootstrap mean (sd)",
+        caption="cop: lever arm, cm; k: N·m/rad; b: N·m·s/rad; I: kg·m²",
+    )
+    for column in ("condition", "n", "cop", "k", "b", "I", "VAF %"):
+        table.add_column(column, justify="right", no_wrap=True)
     for tp in results.timing_points:
-        table.add_row(
-            tp.key,
-            str(tp.n_perturbed),
-            f"{tp.cop_m * 100:.2f}",
-            *(
-                f"{np.mean(v):.4g} ± {np.std(v, ddof=1) if v.size > 1 else 0.0:.2g}"
-                for v in (tp.stiffness, tp.damping, tp.inertia, tp.vaf)
-            ),
-        )
+        cells = [
+            f"{np.mean(v):{fmt}} ({np.std(v, ddof=1) if v.size > 1 else 0.0:{fmt}})"
+            for v, fmt in (
+                (tp.stiffness, ".0f"),
+                (tp.damping, ".2f"),
+                (tp.inertia, ".3f"),
+            )
+        ]
+        vaf = f"{np.mean(tp.vaf):.1f}"
+        table.add_row(tp.key, str(tp.n_perturbed), f"{tp.cop_m * 100:.2f}", *cells, vaf)
     return table
 
 
