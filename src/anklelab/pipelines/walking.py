@@ -475,6 +475,7 @@ def _stance_trials(session: Session, settings: WalkingSettings, filters: Platfor
             (contact <= n_base, f"heel contact within the first {base} (no unloaded baseline)"),
             (~cop_defined, "centre of pressure undefined at heel contact"),
             (perturbed & np.isnan(delay), "perturbed trial without delay_ms"),
+            (perturbed & (sign == 0), "perturbed trial without a direction (dorsi or plantar)"),
             (perturbed & ~found, "no perturbation found in the motor angle"),
             (
                 perturbed & (np.sign(onsets.amplitude) != sign),
