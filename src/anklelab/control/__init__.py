@@ -34,7 +34,9 @@ from anklelab.control.servo import (
     fit_second_order,
     loop_margins,
     periodic_frf,
+    phase_crossing_hz,
     prbs,
+    second_order_response,
 )
 from anklelab.control.trigger import onset_updates, trigger_updates
 
@@ -64,8 +66,10 @@ __all__ = [
     "observer_update",
     "onset_updates",
     "periodic_frf",
+    "phase_crossing_hz",
     "position_control_update",
     "prbs",
     "safety_update",
+    "second_order_response",
     "trigger_updates",
 ]

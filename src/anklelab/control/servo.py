@@ -29,6 +29,7 @@ __all__ = [
     "periodic_frf",
     "phase_crossing_hz",
     "prbs",
+    "second_order_response",
 ]
 
 
@@ -139,7 +140,10 @@ def periodic_frf(
     return freqs[excited], fy[..., excited] / fx[excited]
 
 
-def _second_order(f: NDArray[np.float64], fn: float, zeta: float, delay: float) -> NDArray:
+def second_order_response(
+    f: NDArray[np.float64], fn: float, zeta: float, delay: float
+) -> NDArray[np.complex128]:
+    """``wn²/(s² + 2 zeta wn s + wn²) e^(-s delay)`` at frequencies ``f`` (Hz), ``s = 2 pi j f``."""
     s = 2j * np.pi * f
     wn = 2 * np.pi * fn
     return wn**2 / (s**2 + 2 * zeta * wn * s + wn**2) * np.exp(-s * delay)
@@ -157,7 +161,8 @@ def fit_second_order(
     Examples
     --------
     >>> f = np.linspace(1.0, 600.0, 600)
-    >>> fn, zeta, tau = fit_second_order(f, _second_order(f, 200.0, 0.4, 1e-4), f_max=600.0)
+    >>> h = second_order_response(f, 200.0, 0.4, 1e-4)
+    >>> fn, zeta, tau = fit_second_order(f, h, f_max=600.0)
     >>> round(fn, 3), round(zeta, 3), round(tau * 1e6, 3)
     (200.0, 0.4, 100.0)
     """
@@ -170,7 +175,7 @@ def fit_second_order(
              0.4, 1e-4)  # fmt: skip
 
     def residual(p: NDArray[np.float64]) -> NDArray[np.float64]:
-        e = (_second_order(f, *p) - h) / np.maximum(mag, 0.05)
+        e = (second_order_response(f, *p) - h) / np.maximum(mag, 0.05)
         return np.concatenate([e.real, e.imag])
 
     fit = optimize.least_squares(residual, start, bounds=([1.0, 0.01, 0.0], [1e4, 3.0, 0.01]))
@@ -203,7 +208,7 @@ def phase_crossing_hz(freqs: ArrayLike, frf: ArrayLike, phase_deg: float = -90.0
     Examples
     --------
     >>> f = np.linspace(1.0, 600.0, 600)
-    >>> round(phase_crossing_hz(f, _second_order(f, 200.0, 0.4, 0.0)), 3)
+    >>> round(phase_crossing_hz(f, second_order_response(f, 200.0, 0.4, 0.0)), 3)
     200.0
     """
     f = np.asarray(freqs, dtype=float)

@@ -63,7 +63,13 @@ from anklelab.platforms.perturberator import PerturberatorParameters
 from anklelab.sim.artefacts import Artefacts
 from anklelab.sim.drivetrain import DriveFault, FootLoad, PlatformRun, simulate_platform
 from anklelab.sim.foot import FootModel, NominalStance, bench_law, foot_load, foot_model
-from anklelab.sim.gait import heel_contact_times, sample_gait, stance_signals, vertical_force
+from anklelab.sim.gait import (
+    GaitTrials,
+    heel_contact_times,
+    sample_gait,
+    stance_signals,
+    vertical_force,
+)
 from anklelab.sim.sensors import (
     force_channels,
     goniometer_reading,
@@ -265,6 +271,97 @@ def _manifest(
     return delays[order], signs[order]
 
 
+def _onsets(
+    setup: _Setup,
+    trials: GaitTrials,
+    delays: NDArray[np.float64],
+    signs: NDArray[np.float64],
+    rng: np.random.Generator,
+) -> NDArray[np.float64]:
+    """Start of each perturbation's motion plan (s; NaN if unperturbed): the microcontroller's
+    threshold on the vertical force at its update instants, then its delay counter."""
+    p, plan = setup.params, setup.plan
+    threshold = p.walking.heel_contact_threshold_n
+    rate = plan.update_rate_hz
+    first = np.floor(trials.contact_s * rate).astype(np.int64)  # the loading phase suffices
+    window = first[:, None] + np.arange(int(np.ceil(trials.loading_s.max() * rate)) + 2)
+    force = vertical_force(trials, p.gait, window / rate)
+    offset = np.zeros(len(trials))
+    counter = np.zeros(len(trials))
+    if setup.art.onset_jitter:
+        limit = threshold - 5.0
+        offset = np.clip(
+            p.trigger.input_offset_sd_n * rng.standard_normal(len(trials)), -limit, limit
+        )
+        counter = p.trigger.counter_error_sd_fraction * rng.standard_normal(len(trials))
+    trigger = first + trigger_updates(force, threshold, offset)
+    start = onset_updates(trigger, np.nan_to_num(delays) / 1000.0, rate, counter)
+    return np.where(signs != 0, start / rate, np.nan)
+
+
+@dataclass(frozen=True)
+class _WalkingRun:
+    """True signals of all walking trials (``(n_trials, n)``; wrench ``(n_trials, 6, n)``) and
+    the exact perturbation of the ankle angle and torque around each onset."""
+
+    motor: NDArray[np.float64]
+    angle: NDArray[np.float64]
+    torque: NDArray[np.float64]
+    wrench: NDArray[np.float64]
+    pert_angle: NDArray[np.float64]
+    pert_torque: NDArray[np.float64]
+
+
+def _run_walking(
+    setup: _Setup,
+    load: FootLoad,
+    onset: NDArray[np.float64],
+    signs: NDArray[np.float64],
+    advance: Callable[[int], None],
+) -> _WalkingRun:
+    """Simulate the trials in batches; re-run each perturbed one from just before its onset
+    without the perturbation, so that the difference is the exact perturbation."""
+    p = setup.params
+    walk = p.walking
+    n_trials, n = load.channels.shape[0], load.channels.shape[2]
+    move = RampHold(walk.amplitude_rad, walk.ramp_s, walk.hold_s, walk.return_s)
+    updates = setup.plan.update_times(n / setup.fs)
+    per_sample = round(p.servo.velocity_loop_rate_hz / setup.fs)
+    width = round(walk.window_ms * setup.fs / 1000) + 4 * MARGIN
+    out = _WalkingRun(*(np.zeros((n_trials, n)) for _ in range(3)), np.zeros((n_trials, 6, n)),
+                      np.zeros((n_trials, n)), np.zeros((n_trials, n)))  # fmt: skip
+    for start in range(0, n_trials, BATCH):
+        b = slice(start, min(start + BATCH, n_trials))
+        planned = move(updates[None, :], np.nan_to_num(onset[b])[:, None], signs[b][:, None])
+        sub = FootLoad(load.channels[b], load.fs, load.scalars[b])
+        first = np.ceil(np.nan_to_num(onset[b]) * setup.fs - 1e-9).astype(np.int64)
+        fork = np.where(signs[b] != 0, (first - 2 * MARGIN) * per_sample, -1)
+        run = simulate_platform(
+            p, setup.reference(planned, n), load=sub, artefacts=setup.art,
+            substeps=setup.substeps, fork=fork,
+        )  # fmt: skip
+        _check_faults(run, "walking", start)
+        assert run.wrench is not None and run.snapshot is not None
+        out.motor[b], out.angle[b], out.torque[b], out.wrench[b] = (
+            run.motor_angle, run.ankle_angle, run.ankle_torque, run.wrench
+        )  # fmt: skip
+        moved = np.flatnonzero(signs[b] != 0)
+        if moved.size:
+            still = simulate_platform(
+                p, np.zeros((moved.size, n * per_sample // 2)),
+                load=FootLoad(sub.channels[moved], load.fs, sub.scalars[moved]),
+                artefacts=setup.art, plate=False, substeps=setup.substeps,
+                resume=(fork[moved], run.snapshot[moved]), stop=fork[moved] + width * per_sample,
+            )  # fmt: skip
+            for m, i in enumerate(moved):
+                span = slice(first[i] - 2 * MARGIN, first[i] - 2 * MARGIN + width)
+                k = start + i
+                out.pert_angle[k, span] = out.angle[k, span] - still.ankle_angle[m, span]
+                out.pert_torque[k, span] = out.torque[k, span] - still.ankle_torque[m, span]
+        advance(b.stop - b.start)
+    return out
+
+
 def _walking(
     setup: _Setup,
     foot: FootModel,
@@ -283,67 +380,12 @@ def _walking(
     n = round(gait.trial_duration_s * setup.fs)
     time = np.arange(n) / setup.fs
     heel_contact = heel_contact_times(trials, gait, walk.heel_contact_threshold_n)
-    # the microcontroller's trigger and delay counter, on the force at its update instants
-    updates = setup.plan.update_times(gait.trial_duration_s)
-    rate = setup.plan.update_rate_hz
-    first_update = np.floor(trials.contact_s * rate).astype(np.int64)  # loading phase only
-    window = first_update[:, None] + np.arange(int(np.ceil(trials.loading_s.max() * rate)) + 2)
-    fz_updates = vertical_force(trials, gait, window / rate)
-    limit = walk.heel_contact_threshold_n - 5.0
-    offset = np.zeros(n_trials)
-    counter = np.zeros(n_trials)
-    if art.onset_jitter:
-        offset = np.clip(p.trigger.input_offset_sd_n * rng.standard_normal(n_trials), -limit, limit)
-        counter = p.trigger.counter_error_sd_fraction * rng.standard_normal(n_trials)
-    trigger = first_update + trigger_updates(fz_updates, walk.heel_contact_threshold_n, offset)
-    k_on = onset_updates(
-        trigger, np.nan_to_num(delays) / 1000.0, setup.plan.update_rate_hz, counter
-    )
-    onset = np.where(signs != 0, k_on / setup.plan.update_rate_hz, np.nan)
-    move = RampHold(walk.amplitude_rad, walk.ramp_s, walk.hold_s, walk.return_s)
-    stance = stance_signals(trials, gait, time)
-    load, nominal = foot_load(foot, trials, stance, heel_contact, time)
-
-    motor = np.empty((n_trials, n))
-    angle = np.empty((n_trials, n))
-    torque = np.empty((n_trials, n))
-    pert = np.zeros((n_trials, n))
-    pert_torque = np.zeros((n_trials, n))
-    wrench = np.empty((n_trials, 6, n))
-    for start in range(0, n_trials, BATCH):
-        b = slice(start, min(start + BATCH, n_trials))
-        planned = move(updates[None, :], np.nan_to_num(onset[b])[:, None], signs[b][:, None])
-        sub = FootLoad(load.channels[b], load.fs, load.scalars[b])
-        moved = np.flatnonzero(signs[b] != 0)
-        steps_per_sample = round(p.servo.velocity_loop_rate_hz / setup.fs)
-        first = np.ceil(np.nan_to_num(onset[b]) * setup.fs - 1e-9).astype(np.int64)
-        fork = np.where(signs[b] != 0, (first - 2 * MARGIN) * steps_per_sample, -1)
-        run = simulate_platform(
-            p, setup.reference(planned, n), load=sub, artefacts=art, substeps=setup.substeps,
-            fork=fork,
-        )  # fmt: skip
-        _check_faults(run, "walking", start)
-        assert run.wrench is not None and run.snapshot is not None
-        motor[b], angle[b], torque[b], wrench[b] = (
-            run.motor_angle, run.ankle_angle, run.ankle_torque, run.wrench
-        )  # fmt: skip
-        if moved.size:  # the same trials without the perturbation, from just before the onset
-            width = round(walk.window_ms * setup.fs / 1000) + 4 * MARGIN
-            rest = FootLoad(sub.channels[moved], load.fs, sub.scalars[moved])
-            still = simulate_platform(
-                p, np.zeros((moved.size, n * steps_per_sample // 2)), load=rest, artefacts=art,
-                plate=False, substeps=setup.substeps,
-                resume=(fork[moved], run.snapshot[moved]),
-                stop=fork[moved] + width * steps_per_sample,
-            )  # fmt: skip
-            for m, i in enumerate(moved):
-                span = slice(first[i] - 2 * MARGIN, first[i] - 2 * MARGIN + width)
-                pert[start + i, span] = angle[start + i, span] - still.ankle_angle[m, span]
-                pert_torque[start + i, span] = torque[start + i, span] - still.ankle_torque[m, span]
-        advance(b.stop - b.start)
-    channels = force_channels(wrench, p, art, rng)
-    true_angle = nominal.angle_rad + angle
-    recorded_motor = motor_angle_output(motor, p, art)
+    onset = _onsets(setup, trials, delays, signs, rng)
+    load, nominal = foot_load(foot, trials, stance_signals(trials, gait, time), heel_contact, time)
+    run = _run_walking(setup, load, onset, signs, advance)
+    channels = force_channels(run.wrench, p, art, rng)
+    true_angle = nominal.angle_rad + run.angle
+    recorded_motor = motor_angle_output(run.motor, p, art)
     recorded_angle = goniometer_reading(true_angle, p, art, rng)
     names = ("none", "dorsi", "plantar")
     walking = tuple(
@@ -361,14 +403,12 @@ def _walking(
         for i in range(n_trials)
     )
     truth: dict[str, Any] = {
-        "reference": _reference(
-            setup, foot, delays, signs, onset, heel_contact, pert, pert_torque, nominal
-        ),
+        "reference": _reference(setup, foot, delays, signs, onset, heel_contact, run, nominal),
         "trials": {"heel_contact_s": heel_contact, "onset_s": onset},
     }
     if time_courses:
         truth["time_courses"] = {
-            "ankle_torque_nm": torque,
+            "ankle_torque_nm": run.torque,
             "ankle_angle_rad": true_angle,
             "lever_arm_m": nominal.lever_arm_m,
             "stiffness_nm_per_rad": nominal.stiffness_nm_per_rad,
@@ -383,14 +423,14 @@ def _reference(
     signs: NDArray[np.float64],
     onset: NDArray[np.float64],
     heel_contact: NDArray[np.float64],
-    pert: NDArray[np.float64],
-    pert_torque: NDArray[np.float64],
+    run: _WalkingRun,
     nominal: NominalStance,
 ) -> dict[str, dict[str, dict[str, float]]]:
     """Per direction and timing point: the values a perfect estimator should return."""
     window_ms = setup.params.walking.window_ms
     width = round(window_ms * setup.fs / 1000)
     fs = setup.fs
+    pert, pert_torque = run.pert_angle, run.pert_torque
     pert_rate = np.gradient(pert, 1 / fs, axis=1)
     out: dict[str, dict[str, dict[str, float]]] = {}
     for sign, direction in ((1.0, "dorsi"), (-1.0, "plantar")):

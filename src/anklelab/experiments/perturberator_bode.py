@@ -31,6 +31,7 @@ from anklelab.control.servo import (
     periodic_frf,
     phase_crossing_hz,
     prbs,
+    second_order_response,
 )
 from anklelab.platforms import load_platform
 from anklelab.platforms.perturberator import PerturberatorParameters
@@ -89,10 +90,8 @@ class ServoBode:
         matplotlib.use("Agg")
         import matplotlib.pyplot as plt
 
-        from anklelab.control.servo import _second_order
-
         f = self.freqs_hz
-        fit = _second_order(
+        fit = second_order_response(
             f, self.fit_natural_frequency_hz, self.fit_damping_ratio, self.fit_delay_s
         )
         fig, (mag, ph) = plt.subplots(2, 1, sharex=True, figsize=(7, 6))
