@@ -127,3 +127,20 @@ def test_a_drive_fault_stops_the_protocol():
     strict = load_platform("perturberator").replace({"servo.following_error_limit_rad": 1e-4})
     with pytest.raises(SafetyLimitError, match=r"walking trial \d+: the drive tripped"):
         simulate_perturberator(strict, trials_per_point=1, n_unperturbed=0, n_calibration=0)
+
+
+def test_a_compliant_shell_shares_the_rotation_with_the_ankle(params):
+    n = 600
+    load = constant_load(params, n, 0.0)
+    load.channels[:, K.G_CONTACT] = 1.0
+    load.channels[:, K.G_K] = 1000.0
+    load.scalars[:, K.F_KSH] = 10000.0
+    load.scalars[:, K.F_BSH] = 100.0  # well damped, so it settles within the run
+    ref = np.zeros((1, n * 8))
+    ref[0, 2400:] = 0.01
+    run = simulate_platform(params, ref, load=load, plate=False)
+    hinge, ankle = run.hinge_angle[0, -10], run.ankle_angle[0, -10]
+    assert ankle == pytest.approx(
+        hinge * 10000.0 / (10000.0 + 1000.0), rel=1e-4
+    )  # springs in series
+    assert run.ankle_torque[0, -10] == pytest.approx(1000.0 * ankle, rel=1e-3)
