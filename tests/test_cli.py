@@ -52,3 +52,13 @@ def test_import_does_not_load_matplotlib():
     code = "import sys, anklelab, anklelab.cli; print('matplotlib' in sys.modules)"
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert out.stdout.strip() == "False"
+
+
+def test_usage_error_exits_2_without_traceback():
+    proc = subprocess.run(
+        [sys.executable, "-c", "from anklelab.cli import run; run()", "import", "somewhere"],
+        capture_output=True,
+        text=True,
+    )
+    assert proc.returncode == 2
+    assert "Missing option" in proc.stderr and "Traceback" not in proc.stderr
