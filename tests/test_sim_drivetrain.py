@@ -130,7 +130,7 @@ def test_a_drive_fault_stops_the_protocol():
 
 
 def test_a_compliant_shell_shares_the_rotation_with_the_ankle(params):
-    n = 600
+    n = 1500
     load = constant_load(params, n, 0.0)
     load.channels[:, K.G_CONTACT] = 1.0
     load.channels[:, K.G_K] = 1000.0
@@ -140,7 +140,5 @@ def test_a_compliant_shell_shares_the_rotation_with_the_ankle(params):
     ref[0, 2400:] = 0.01
     run = simulate_platform(params, ref, load=load, plate=False)
     hinge, ankle = run.hinge_angle[0, -10], run.ankle_angle[0, -10]
-    assert ankle == pytest.approx(
-        hinge * 10000.0 / (10000.0 + 1000.0), rel=1e-4
-    )  # springs in series
+    assert ankle == pytest.approx(hinge * 10000.0 / 11000.0, rel=1e-3)  # springs in series
     assert run.ankle_torque[0, -10] == pytest.approx(1000.0 * ankle, rel=1e-3)
