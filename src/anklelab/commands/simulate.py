@@ -100,3 +100,17 @@ def perturberator(
         f"{out}: {len(session.calibration)} calibration, {len(session.walking)} walking and "
         f"{len(session.bench)} bench recordings ({foot} foot, seed {seed})"
     )
+    from rich.console import Console
+    from rich.table import Table
+
+    table = Table(title="true reference per timing point (truth/reference)")
+    for column in ("direction", "delay (ms)", "trials", "cop (m)", "stiffness (N·m/rad)",
+                   "onset sd (ms)"):  # fmt: skip
+        table.add_column(column, justify="right")
+    for direction, points in session.truth["reference"].items():
+        for delay, ref in points.items():
+            table.add_row(
+                direction, delay, str(ref["n_trials"]), f"{ref['cop_m']:.4f}",
+                f"{ref['stiffness_nm_per_rad']:.1f}", f"{ref['onset_sd_ms']:.2f}",
+            )  # fmt: skip
+    Console().print(table)
