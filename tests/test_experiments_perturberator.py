@@ -5,7 +5,7 @@ import pytest
 from typer.testing import CliRunner
 
 from anklelab.cli import app
-from anklelab.data import diff_sessions, load_session, save_session
+from anklelab.data import diff_sessions, load_session, save_session, session_hash
 from anklelab.experiments import simulate_perturberator
 from anklelab.forceplate import CHANNELS, ankle_torque, resultants, sagittal_load
 from anklelab.platforms import load_platform
@@ -192,6 +192,9 @@ def test_same_seed_same_session_and_same_bytes(session, tmp_path):
     a = save_session(session, tmp_path / "a.h5")
     b = save_session(again, tmp_path / "b.h5")
     assert a.read_bytes() == b.read_bytes()
+    a_dir = save_session(session, tmp_path / "a", format="dir")
+    b_dir = save_session(again, tmp_path / "b", format="dir")
+    assert session_hash(a_dir) == session_hash(b_dir)
 
 
 @pytest.mark.parametrize("fmt", ["h5", "dir"])
