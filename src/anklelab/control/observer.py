@@ -24,7 +24,6 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit
 from numpy.typing import NDArray
-from scipy.signal import cont2discrete
 
 from anklelab.platforms.capstan import CapstanParameters, FrictionParameters
 from anklelab.sim.capstan._jit import FAST
@@ -62,6 +61,23 @@ class ObserverConstants(NamedTuple):
     capstan_ratio: float
     torque_per_amp: float
     fs: float
+
+
+def _tustin(
+    a: NDArray[np.float64],
+    b: NDArray[np.float64],
+    c: NDArray[np.float64],
+    d: NDArray[np.float64],
+    dt: float,
+) -> tuple[NDArray[np.float64], ...]:
+    """Bilinear (Tustin) discretisation of a 2-state system (scipy's ``cont2discrete`` form)."""
+    m = np.eye(2) - 0.5 * dt * a
+    inv = np.array([[m[1, 1], -m[0, 1]], [-m[1, 0], m[0, 0]]]) / (
+        m[0, 0] * m[1, 1] - m[0, 1] * m[1, 0]
+    )
+    ad = inv @ (np.eye(2) + 0.5 * dt * a)
+    bd = inv @ (dt * b)
+    return ad, bd, c @ inv, d + 0.5 * c @ bd
 
 
 def observer_constants(
@@ -106,7 +122,7 @@ def observer_constants(
     b = np.array([[0.0], [w0**2]])
     c = np.array([[1.0, 0.0], [0.0, 1.0], [-(w0**2), -2.0 * damping_ratio * w0]])
     d = np.array([[0.0], [0.0], [w0**2]])
-    ad, bd, cd, dd, _ = cont2discrete((a, b, c, d), 1.0 / fs, method="bilinear")
+    ad, bd, cd, dd = _tustin(a, b, c, d, 1.0 / fs)
     plat = params.platform
     return ObserverConstants(
         ad=np.ascontiguousarray(ad),
@@ -135,7 +151,7 @@ def new_observer_state() -> NDArray[np.float64]:
     return np.zeros(6)
 
 
-@njit(cache=True, fastmath=FAST, error_model="numpy")
+@njit(cache=True, fastmath=FAST, error_model="numpy", inline="always")
 def observer_update(
     c: ObserverConstants, state: NDArray[np.float64], angle: float, current: float
 ) -> float:

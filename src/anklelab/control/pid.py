@@ -219,7 +219,7 @@ def friction_feedforward(c: ControlConstants, speed: float) -> float:
     return c.capstan_ratio * (tc * s + b * wp)
 
 
-@njit(cache=True, fastmath=FAST, error_model="numpy")
+@njit(cache=True, fastmath=FAST, error_model="numpy", inline="always")
 def position_control_update(
     c: ControlConstants,
     state: NDArray[np.float64],

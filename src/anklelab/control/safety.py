@@ -112,7 +112,7 @@ def new_safety_state() -> NDArray[np.float64]:
     return np.array([0.0, -1.0, 0.0])
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def safety_update(
     limits: NDArray[np.float64],
     state: NDArray[np.float64],

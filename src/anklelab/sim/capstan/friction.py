@@ -58,7 +58,7 @@ def friction_array(friction: FrictionParameters) -> NDArray[np.float64]:
     )
 
 
-@njit(cache=True, fastmath=FAST, error_model="numpy")
+@njit(cache=True, fastmath=FAST, error_model="numpy", inline="always")
 def _decay(speed: float, law: NDArray[np.float64]) -> float:
     """Stribeck decay ``exp(-(speed / ws)^sigma)`` for ``speed >= 0`` (sigma = 2 fast path)."""
     ratio = speed / law[5]
@@ -77,7 +77,7 @@ def kinetic_friction(w: float, law: NDArray[np.float64]) -> float:
     return s * (tc + (law[4] - tc) * _decay(abs(w), law)) + b * w
 
 
-@njit(cache=True, fastmath=FAST, error_model="numpy")
+@njit(cache=True, fastmath=FAST, error_model="numpy", inline="always")
 def friction_step(
     w: float, torque: float, inertia: float, h: float, law: NDArray[np.float64]
 ) -> tuple[float, float]:

@@ -160,7 +160,7 @@ def stepping(c: PlantConstants, fs: float, max_step_s: float) -> Stepping:
     )
 
 
-@njit(cache=True, fastmath=FAST, error_model="numpy")
+@njit(cache=True, fastmath=FAST, error_model="numpy", inline="always")
 def plant_advance(
     c: PlantConstants,
     law: NDArray[np.float64],
@@ -246,7 +246,7 @@ def plant_advance(
     return sum_interaction / n, sum_friction / n, sum_voltage / n
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def encoder_angle(pinion_angle: float, gear_ratio: float, resolution: float) -> float:
     """Pinion angle as a motor encoder reports it: the motor angle floored to whole counts."""
     return np.floor(gear_ratio * pinion_angle / resolution) * resolution / gear_ratio
