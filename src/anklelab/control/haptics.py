@@ -86,8 +86,8 @@ class TerrainProfile:
 
     Examples
     --------
-    >>> ramp = TerrainProfile(np.array([0.0, 1.0, 2.0]), np.array([0.0, 0.0, 0.1]))
-    >>> np.degrees(ramp.slope_angle([0.5, 1.5])).round(2)
+    >>> ramp = TerrainProfile(np.arange(5.0), np.array([0.0, 0.0, 0.0, 0.1, 0.2]))
+    >>> np.degrees(ramp.slope_angle([0.5, 3.5])).round(2)
     array([0.  , 5.71])
     """
 
@@ -114,12 +114,13 @@ class TerrainProfile:
         return cls(d, h)
 
     def slope_angle(self, distance_m: ArrayLike) -> NDArray[np.float64]:
-        """Ground slope (rad, uphill positive) at ``distance_m`` along the path."""
-        segment = np.diff(self.height_m) / np.diff(self.distance_m)
-        index = np.clip(
-            np.searchsorted(self.distance_m, distance_m, side="right") - 1, 0, segment.size - 1
-        )
-        return np.arctan(segment[index])
+        """Ground slope (rad, uphill positive) at ``distance_m`` along the path.
+
+        The profile's gradient (central differences) is interpolated linearly and held beyond
+        the ends.
+        """
+        gradient = np.gradient(self.height_m, self.distance_m)
+        return np.arctan(np.interp(distance_m, self.distance_m, gradient))
 
     def equilibrium(self, duration_s: float, fs: float, speed_m_s: float) -> NDArray[np.float64]:
         """Platform equilibrium angle (rad) for a walk at ``speed_m_s``, sampled at ``fs`` Hz."""

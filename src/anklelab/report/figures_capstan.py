@@ -128,8 +128,13 @@ def chirp_tracking_figure(
     phase.axhline(-45, color="0.6", ls=":")
     phase.set_ylabel("phase (deg)")
     phase.set_xlabel("frequency (Hz)")
+    top_hz = metrics.frequency_hz[-1]
+
+    def hz(value: float) -> str:
+        return f"{value:.2f} Hz" if np.isfinite(value) else f"beyond {top_hz:.1f} Hz"
+
     gain.set_title(
-        f"-3 dB: {metrics.bandwidth_3db_hz:.2f} Hz, 45 deg lag: {metrics.bandwidth_45deg_hz:.2f} Hz"
+        f"-3 dB: {hz(metrics.bandwidth_3db_hz)}, 45 deg lag: {hz(metrics.bandwidth_45deg_hz)}"
     )
     fig.tight_layout()
     return _save(fig, path)
