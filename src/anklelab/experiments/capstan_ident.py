@@ -151,10 +151,8 @@ def _manifest(folder: Path) -> list[Path]:
     for row in reader:
         row = {k.strip(): (v or "").strip() for k, v in row.items() if k}
         where = f"{file}, line {reader.line_num}"
-        if not row["run"].lstrip("-").isdigit():
-            raise SessionFormatError(
-                f"{where}, column 'run': got {row['run']!r}; expected an integer"
-            )
+        if not row["run"]:
+            raise SessionFormatError(f"{where}, column 'run': empty; expected a run label")
         name = row["file"]
         if not name or "/" in name or "\\" in name or not (folder / name).is_file():
             raise SessionFormatError(f"{where}, column 'file': {name!r} is not a file in {folder}")

@@ -161,11 +161,12 @@ class FrictionIdentifier:
     decay_per_s_, coulomb_over_inertia_ : dict
         The spin-down ratios ``b/J`` and ``Tc/J`` per direction.
     spindown_vaf_percent_, chirp_vaf_percent_ : float
-        VAF of the closed-form spin-down fit and of the full model simulated through the chirp.
+        VAF of the closed-form spin-down fit and of the full model simulated through the chirps
+        (each pooled over its runs).
     spindown_fits_ : list of SpindownFit
         Per-run fitted coasts.
     chirp_prediction_ : ndarray
-        The model's velocity through the (first) chirp, rad/s.
+        The model's velocity through the first chirp, rad/s.
 
     Examples
     --------
@@ -232,8 +233,11 @@ class FrictionIdentifier:
             if min_speed >= 3.5 * ws:
                 break
             min_speed = 3.5 * ws
-        self.chirp_prediction_ = self.predict(data.chirp[0].torque_nm, fs)
-        self.chirp_vaf_percent_ = float(vaf(data.chirp[0].velocity_rad_s, self.chirp_prediction_))
+        predictions = [self.predict(run.torque_nm, fs) for run in data.chirp]
+        self.chirp_prediction_ = predictions[0]
+        self.chirp_vaf_percent_ = float(  # pooled over every chirp
+            vaf(np.concatenate([r.velocity_rad_s for r in data.chirp]), np.concatenate(predictions))
+        )
         return self
 
     def _fit_spindown(self, coasts: list[_Coast], fs: float) -> None:
@@ -247,7 +251,7 @@ class FrictionIdentifier:
                 raise SessionFormatError(
                     f"spindown: no {direction} run coasts for 5 samples above the fitted speed "
                     "range; expected spin-downs from well above the Stribeck region in both "
-                    "directions"
+                    "directions (or a lower min_speed_rad_s, --min-speed)"
                 )
             pieces = []
             for c in mine:
