@@ -12,11 +12,14 @@ Paper 001, section 3.3, in three stages (everything at the pinion, cw positive):
 2. **Chirp.** Over short windows in which the shaft turns one way without sticking, the
    integrated equation of motion ``J [dw + a int w + c int s] = int tau - int s (Ts - Tc) g(w)``
    (``g`` the Stribeck decay) is linear in ``J``: least squares fixes ``J``, hence ``b`` and ``Tc``.
-3. **Low speed and breakaway.** Below the fitted coasts (each coast's end, through the Stribeck
-   region to the stop, and each run's start from rest, where the speed controller's torque
-   breaks the shaft away) the friction map ``F = tau - J w'`` is measured, ``w`` and ``w'`` from
-   local quadratic fits to the encoder angle; with ``J``, ``b``, ``Tc`` fixed, the static
-   friction ``Ts`` and the Stribeck velocity ``ws`` are fitted to it by least squares.
+3. **Low speed and breakaway.** With ``J``, ``b``, ``Tc`` fixed, the static friction ``Ts`` and
+   the Stribeck velocity ``ws`` come from the slow parts of the spin-down runs: each coast's end
+   (through the Stribeck region to the stop) and each start from rest (where the speed
+   controller's torque breaks the shaft away). A least-squares fit to the friction map
+   ``F = tau - J w'`` (``w``, ``w'`` from local quadratic fits to the encoder angle) starts
+   them; output error refines them: the full model, sticking included, is simulated through
+   every segment and its speed compared with the measured one (each coast end's start speed
+   is free).
 
 Stages 2 and 3 depend on each other through the Stribeck term and are iterated. Velocities are
 integrated back to angle (exactly the encoder's, when the velocity column is its difference).
@@ -140,6 +143,8 @@ class FrictionIdentifier:
         Local quadratic (Savitzky-Golay) window for speed and acceleration at low speed, s.
     low_speed_floor_rad_s : float
         Friction-map samples need the speed above this throughout their window (no stop).
+    tail_s : float
+        Longest stretch of each coast's end (below ``min_speed_rad_s``) used at low speed, s.
     zero_torque_nm : float
         A spin-down's coast is its final stretch with ``|torque| <=`` this (0: exact zeros, as
         DESIGN.md section 6 prescribes; raise it for measured, noisy torques).
@@ -186,6 +191,7 @@ class FrictionIdentifier:
         derivative_window_s: float = 0.02,
         low_speed_floor_rad_s: float = 0.5,
         zero_torque_nm: float = 0.0,
+        tail_s: float = 1.0,
         stribeck_exponent: float = 2.0,
         substeps: int = 4,
         iterations: int = 3,
@@ -197,6 +203,7 @@ class FrictionIdentifier:
         self.derivative_window_s = derivative_window_s
         self.low_speed_floor_rad_s = low_speed_floor_rad_s
         self.zero_torque_nm = zero_torque_nm
+        self.tail_s = tail_s
         self.stribeck_exponent = stribeck_exponent
         self.substeps = substeps
         self.iterations = iterations
@@ -210,6 +217,7 @@ class FrictionIdentifier:
             "chirp_min_speed_rad_s",
             "derivative_window_s",
             "low_speed_floor_rad_s",
+            "tail_s",
         ):
             if not getattr(self, name) > 0:
                 raise ValueError(f"{name} must be > 0; got {getattr(self, name)!r}")
@@ -229,7 +237,7 @@ class FrictionIdentifier:
             ts = ws = None
             for _ in range(self.iterations):
                 self._fit_inertia(data.chirp, fs, ts, ws)
-                ts, ws = self._fit_low_speed(data.spindown, fs)
+                ts, ws = self._fit_low_speed(coasts, data.spindown, fs)
             if min_speed >= 3.5 * ws:
                 break
             min_speed = 3.5 * ws
@@ -345,8 +353,76 @@ class FrictionIdentifier:
         self.viscous_nms_per_rad_ = {d: self.decay_per_s_[d] * inertia for d in DIRECTIONS}
         self.coulomb_nm_ = {d: self.coulomb_over_inertia_[d] * inertia for d in DIRECTIONS}
 
-    def _fit_low_speed(self, runs: tuple[IdentRun, ...], fs: float) -> tuple[float, float]:
-        """Fit ``Ts`` and ``ws`` to the friction map ``F = tau - J w'`` below the fitted coasts."""
+    def _fit_low_speed(
+        self, coasts: list[_Coast], runs: tuple[IdentRun, ...], fs: float
+    ) -> tuple[float, float]:
+        """Fit ``Ts`` and ``ws``: a start from the friction map, then output error on speed."""
+        ts, ws = self._fit_friction_map(runs, fs)
+        segments = self._low_speed_segments(coasts, fs)
+        free = [k for k, (_, _, w0) in enumerate(segments) if w0 is not None]
+
+        def simulate(x: NDArray[np.float64]) -> NDArray[np.float64]:
+            law = self._law(x[0], x[1])
+            out = []
+            for k, (tau, v, w0) in enumerate(segments):
+                start = x[2 + free.index(k)] if w0 is not None else 0.0
+                angle = _simulate_angle(tau, fs, law, self.inertia_kgm2_, start, self.substeps)
+                out.append(np.diff(angle) * fs - v[1:])
+            return np.concatenate(out)
+
+        top = max(self.coulomb_nm_.values())
+        x0 = np.r_[ts, ws, [segments[k][2] for k in free]]
+        lower = np.r_[0.0, 1e-3, [-np.inf] * len(free)]
+        upper = np.r_[10.0 * top + 1.0, 10.0 * self.min_speed_rad_s, [np.inf] * len(free)]
+        sol = least_squares(
+            simulate,
+            np.clip(x0, lower + 1e-9, upper - 1e-9),
+            bounds=(lower, upper),
+            x_scale=np.r_[top, 1.0, [1.0] * len(free)],
+            diff_step=1e-4,
+        )
+        self.static_friction_nm_ = float(sol.x[0])
+        self.stribeck_velocity_rad_s_ = float(sol.x[1])
+        return self.static_friction_nm_, self.stribeck_velocity_rad_s_
+
+    def _low_speed_segments(
+        self, coasts: list[_Coast], fs: float
+    ) -> list[tuple[NDArray[np.float64], NDArray[np.float64], float | None]]:
+        """(torque, speed, start speed or None from rest) of each coast's end and each start
+        from rest, up to ``min_speed_rad_s``."""
+        segments: list[tuple[NDArray[np.float64], NDArray[np.float64], float | None]] = []
+        limit = round(self.tail_s * fs)
+        for c in coasts:
+            v, tau = c.run.velocity_rad_s, c.run.torque_nm
+            fit = next(f for f in self.spindown_fits_ if f.name == c.run.name).fitted_rad_s
+            begin = c.stop - 1
+            tail_tau = np.where(np.arange(begin, v.size) < c.cut, tau[begin:], 0.0)[:limit]
+            segments.append(
+                (tail_tau, v[begin : begin + limit], float(1.5 * fit[-1] - 0.5 * fit[-2]))
+            )
+            rest = np.flatnonzero(np.abs(v[: c.cut]) > 0.0)
+            fast = np.flatnonzero(np.abs(v[: c.cut]) > self.min_speed_rad_s)
+            if rest.size and fast.size and rest[0] > 0 and np.all(v[: rest[0]] == 0.0):
+                begin = max(0, int(rest[0]) - round(0.1 * fs))
+                segments.append((tau[begin : fast[0]], v[begin : fast[0]], None))
+        return segments
+
+    def _law(self, ts: float, ws: float) -> NDArray[np.float64]:
+        return friction_array(
+            FrictionParameters(
+                inertia_kgm2=self.inertia_kgm2_,
+                viscous_cw_nms_per_rad=self.viscous_nms_per_rad_["cw"],
+                viscous_ccw_nms_per_rad=self.viscous_nms_per_rad_["ccw"],
+                coulomb_cw_nm=self.coulomb_nm_["cw"],
+                coulomb_ccw_nm=self.coulomb_nm_["ccw"],
+                stribeck_velocity_rad_s=ws,
+                static_friction_nm=ts,
+                stribeck_exponent=self.stribeck_exponent,
+            )
+        )
+
+    def _fit_friction_map(self, runs: tuple[IdentRun, ...], fs: float) -> tuple[float, float]:
+        """Starting ``Ts``, ``ws``: least squares on the friction map ``F = tau - J w'``."""
         speeds, frictions = [], []
         width = 2 * round(self.derivative_window_s * fs / 2) + 1
         for run in runs:
@@ -386,10 +462,8 @@ class FrictionIdentifier:
             bounds=([0.0, 1e-3], [10.0 * top + 1.0, 10.0 * self.min_speed_rad_s]),
             x_scale=np.array([top, 1.0]),
         )
-        self.static_friction_nm_ = float(sol.x[0])
-        self.stribeck_velocity_rad_s_ = float(sol.x[1])
         self.friction_map_ = (w, f)
-        return self.static_friction_nm_, self.stribeck_velocity_rad_s_
+        return float(sol.x[0]), float(sol.x[1])
 
     # ---------------------------------------------------------------------- using the model
     def _fitted(self) -> None:
