@@ -7,6 +7,7 @@ __all__ = [
     "EventNotFoundError",
     "NotFittedError",
     "ParameterError",
+    "ResultsFormatError",
     "SafetyLimitError",
     "SessionFormatError",
 ]
@@ -22,6 +23,10 @@ class ParameterError(AnklelabError, ValueError):
 
 class SessionFormatError(AnklelabError, ValueError):
     """A session file or directory does not follow the anklelab session format."""
+
+
+class ResultsFormatError(AnklelabError, ValueError):
+    """A results directory or file is not what an anklelab analysis writes."""
 
 
 class EventNotFoundError(AnklelabError, KeyError):
