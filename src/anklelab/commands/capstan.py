@@ -79,11 +79,9 @@ def _setup(
 def _write_json(out: Path | None, name: str, content: Any) -> None:
     if out is None:
         return
-    from anklelab.data._atomic import atomic_file
+    from anklelab._atomic import write_text_atomic
 
-    out.mkdir(parents=True, exist_ok=True)
-    with atomic_file(out / name) as tmp:
-        tmp.write_text(json.dumps(content, indent=2, default=float) + "\n")
+    write_text_atomic(out / name, json.dumps(content, indent=2, default=float) + "\n")
 
 
 def _table(title: str, columns: list[str], rows: list[list[str]]) -> None:

@@ -100,7 +100,7 @@ def friction(
     """
     import json
 
-    from anklelab.data._atomic import atomic_file
+    from anklelab._atomic import write_text_atomic
     from anklelab.experiments.capstan_ident import read_ident_directory
     from anklelab.ident.friction import FrictionIdentifier
 
@@ -116,8 +116,7 @@ def friction(
         progress(2, 2)
     result = model.to_dict()
     out.mkdir(parents=True, exist_ok=True)
-    with atomic_file(out / "friction.json") as tmp:
-        tmp.write_text(json.dumps(result, indent=2) + "\n")
+    write_text_atomic(out / "friction.json", json.dumps(result, indent=2) + "\n")
     if figures:
         from anklelab.report.figures_capstan import friction_figures
 

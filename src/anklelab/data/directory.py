@@ -36,8 +36,8 @@ from typing import Any
 
 import numpy as np
 
+from anklelab._atomic import atomic_directory
 from anklelab.data import _toml
-from anklelab.data._atomic import atomic_directory
 from anklelab.data._checks import (
     check_columns,
     check_distance,

@@ -25,7 +25,7 @@ from typing import Any
 import h5py
 import numpy as np
 
-from anklelab.data._atomic import atomic_file
+from anklelab._atomic import atomic_file
 from anklelab.data._checks import (
     check_bench_tests,
     check_recording,

@@ -35,9 +35,9 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from anklelab._atomic import atomic_directory
 from anklelab.control.pid import PIDGains
 from anklelab.control.safety import SafetyLimits
-from anklelab.data._atomic import atomic_directory
 from anklelab.data.directory import read_csv_recording, write_csv_recording
 from anklelab.data.session import SESSION_FORMAT, Recording
 from anklelab.errors import SessionFormatError
