@@ -7,6 +7,12 @@
     save_session(session, "my_session.h5")       # atomic; format="dir" writes CSV
 """
 
+from anklelab.data.capstan_ident import (
+    IdentData,
+    IdentRun,
+    read_ident_directory,
+    write_ident_directory,
+)
 from anklelab.data.directory import read_directory, write_directory
 from anklelab.data.hdf5 import H5_FORMAT, read_hdf5, write_hdf5
 from anklelab.data.matlab import read_matlab
@@ -43,6 +49,8 @@ __all__ = [
     "WALKING_COLUMNS",
     "WALKING_MANIFEST_COLUMNS",
     "BenchTest",
+    "IdentData",
+    "IdentRun",
     "Recording",
     "Session",
     "SessionInfo",
@@ -51,6 +59,7 @@ __all__ = [
     "load_session",
     "read_directory",
     "read_hdf5",
+    "read_ident_directory",
     "read_matlab",
     "save_session",
     "session_hash",
@@ -58,4 +67,5 @@ __all__ = [
     "summarize",
     "write_directory",
     "write_hdf5",
+    "write_ident_directory",
 ]

@@ -40,8 +40,8 @@ from scipy.optimize import least_squares
 from scipy.signal import savgol_filter
 
 from anklelab._params import parameters_from_mapping
+from anklelab.data.capstan_ident import IdentData, IdentRun
 from anklelab.errors import NotFittedError, ParameterError, SessionFormatError
-from anklelab.experiments.capstan_ident import IdentData, IdentRun
 from anklelab.platforms.capstan import FrictionParameters
 from anklelab.signals.metrics import vaf
 from anklelab.sim.capstan.friction import friction_array, friction_step, friction_torque
