@@ -7,7 +7,17 @@ from typing import Annotated
 import typer
 
 from anklelab import __version__
-from anklelab.commands import analyze, capstan, identify, importer, platform, session, simulate
+from anklelab.commands import (
+    analyze,
+    capstan,
+    demo,
+    identify,
+    importer,
+    platform,
+    report,
+    session,
+    simulate,
+)
 from anklelab.errors import AnklelabError
 
 app = typer.Typer(
@@ -23,6 +33,8 @@ app.command("analyze")(analyze.analyze)
 app.add_typer(identify.app, name="identify")
 app.add_typer(simulate.app, name="simulate")
 app.add_typer(capstan.app, name="capstan")
+app.command("demo")(demo.demo)
+app.command("report")(report.report)
 
 
 def _version(value: bool) -> None:
@@ -38,17 +50,6 @@ def main(
     ] = False,
 ) -> None:
     """anklelab: digital twins, control and identification for ankle actuation platforms."""
-
-
-@app.command()
-def demo() -> None:
-    """Run the end-to-end demonstration of both platforms."""
-    typer.echo(
-        "The demo will simulate the Perturberator experiment (calibration, perturbed walking,\n"
-        "bench tests), analyse it and compare with paper 000, then identify and control the\n"
-        "capstan platform and compare with paper 001. Its pieces are being built; for now, see\n"
-        "`anklelab --help` and `anklelab platform show perturberator`."
-    )
 
 
 def run() -> None:

@@ -12,10 +12,13 @@ __all__ = ["recording_progress"]
 
 
 @contextmanager
-def recording_progress() -> Iterator[Callable[[str], Callable[[int, int], None]]]:
+def recording_progress(
+    *, transient: bool = True
+) -> Iterator[Callable[[str], Callable[[int, int], None]]]:
     """Yield ``task(description)``, which adds a bar and returns its ``progress(done, total)``.
 
-    Bars go to stderr and disappear when done, so stdout carries only the command's output.
+    Bars go to stderr, so stdout carries only the command's output; they disappear when done
+    unless ``transient`` is false.
     """
     columns = (
         TextColumn("{task.description}"),
@@ -23,7 +26,7 @@ def recording_progress() -> Iterator[Callable[[str], Callable[[int, int], None]]
         MofNCompleteColumn(),
         TimeElapsedColumn(),
     )
-    with Progress(*columns, console=Console(stderr=True), transient=True) as bar:
+    with Progress(*columns, console=Console(stderr=True), transient=transient) as bar:
 
         def task(description: str) -> Callable[[int, int], None]:
             task_id = bar.add_task(description, total=None)
