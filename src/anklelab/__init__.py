@@ -15,6 +15,7 @@ from anklelab.errors import (
     EventNotFoundError,
     NotFittedError,
     ParameterError,
+    ResultsFormatError,
     SafetyLimitError,
     SessionFormatError,
 )
@@ -35,6 +36,7 @@ __all__ = [
     "NotFittedError",
     "ParameterError",
     "PlateGeometry",
+    "ResultsFormatError",
     "SafetyLimitError",
     "SessionFormatError",
     "__version__",

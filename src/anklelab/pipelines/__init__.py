@@ -1,5 +1,12 @@
-"""End-to-end analyses: walking impedance (paper 000)."""
+"""End-to-end analyses: walking impedance (paper 000); the demonstration on both twins."""
 
+from anklelab.pipelines.demo import (
+    CapstanDemo,
+    DemoSettings,
+    PerturberatorDemo,
+    run_capstan,
+    run_perturberator,
+)
 from anklelab.pipelines.walking import (
     STANCE_CHANNELS,
     STEPS,
@@ -14,10 +21,15 @@ from anklelab.pipelines.walking import (
 __all__ = [
     "STANCE_CHANNELS",
     "STEPS",
+    "CapstanDemo",
+    "DemoSettings",
+    "PerturberatorDemo",
     "TimingPoint",
     "WalkingResults",
     "WalkingSettings",
     "analyze_walking",
     "fit_platform_filters",
     "load_walking_settings",
+    "run_capstan",
+    "run_perturberator",
 ]
