@@ -54,6 +54,16 @@ def test_import_does_not_load_matplotlib():
     assert out.stdout.strip() == "False"
 
 
+def test_cli_startup_loads_no_implementation():
+    # commands import their implementation inside the command function, so that `--help` and
+    # every command's start do not pay for numba, scipy, h5py or the twins
+    heavy = ["numba", "scipy", "h5py", "matplotlib", "anklelab.sim", "anklelab.control"]
+    heavy += ["anklelab.data", "anklelab.experiments", "anklelab.ident", "anklelab.pipelines"]
+    code = f"import sys, anklelab.cli; print([m for m in {heavy!r} if m in sys.modules])"
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert out.stdout.strip() == "[]"
+
+
 def test_usage_error_exits_2_without_traceback():
     proc = subprocess.run(
         [sys.executable, "-c", "from anklelab.cli import run; run()", "import", "somewhere"],

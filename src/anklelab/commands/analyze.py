@@ -7,7 +7,7 @@ import io
 import json
 from collections.abc import Sequence
 from pathlib import Path
-from typing import Annotated, Any
+from typing import TYPE_CHECKING, Annotated, Any
 
 import numpy as np
 import typer
@@ -17,15 +17,10 @@ from rich.table import Table
 
 from anklelab._atomic import write_text_atomic
 from anklelab.commands._progress import recording_progress
-from anklelab.data import load_session, session_hash
-from anklelab.data.session import Session
-from anklelab.ident.irf import PlatformFilters
-from anklelab.pipelines.walking import (
-    STEPS,
-    WalkingResults,
-    analyze_walking,
-    load_walking_settings,
-)
+
+if TYPE_CHECKING:
+    from anklelab.data.session import Session
+    from anklelab.pipelines.walking import WalkingResults
 
 __all__ = ["analyze", "trials_table", "write_csv"]
 
@@ -117,6 +112,10 @@ def analyze(
     Writes OUT/results.json (DESIGN.md section 5), OUT/results.csv (one row per timing point and
     direction), OUT/trials.csv (detections and drop reasons per trial) and OUT/*.png figures.
     """
+    from anklelab.data import load_session, session_hash
+    from anklelab.ident.irf import PlatformFilters
+    from anklelab.pipelines.walking import STEPS, analyze_walking, load_walking_settings
+
     settings = load_walking_settings(settings_file, seed=seed)
     filters = PlatformFilters.load(filters_file) if filters_file else None
     with recording_progress() as task:

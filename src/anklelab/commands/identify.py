@@ -11,8 +11,6 @@ from rich.console import Console
 from rich.table import Table
 
 from anklelab.commands._progress import recording_progress
-from anklelab.data import load_session, session_hash
-from anklelab.pipelines.walking import fit_platform_filters, load_walking_settings
 
 app = typer.Typer(help="Identify platform models from recorded data.", no_args_is_help=True)
 
@@ -40,6 +38,9 @@ def platform_filters(
     Fitted on one calibration trial and scored (VAF) on the others; the file can be passed to
     `anklelab analyze --filters`.
     """
+    from anklelab.data import load_session, session_hash
+    from anklelab.pipelines.walking import fit_platform_filters, load_walking_settings
+
     settings = load_walking_settings(
         settings_file,
         filter_inputs=tuple(name.strip() for name in inputs.split(",")) if inputs else None,
@@ -101,7 +102,7 @@ def friction(
     import json
 
     from anklelab._atomic import write_text_atomic
-    from anklelab.experiments.capstan_ident import read_ident_directory
+    from anklelab.data.capstan_ident import read_ident_directory
     from anklelab.ident.friction import FrictionIdentifier
 
     with recording_progress() as task:

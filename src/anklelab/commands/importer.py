@@ -8,7 +8,6 @@ from typing import Annotated
 import typer
 
 from anklelab.commands._progress import recording_progress
-from anklelab.data import load_session, save_session
 from anklelab.errors import AnklelabError
 
 
@@ -20,6 +19,8 @@ def import_session(
     force: Annotated[bool, typer.Option("--force", help="Overwrite OUT if it exists.")] = False,
 ) -> None:
     """Validate a session and write it as one native HDF5 file (atomically)."""
+    from anklelab.data import load_session, save_session
+
     if out.exists() and not force:
         raise AnklelabError(f"{out}: already exists; pass --force to overwrite it")
     with recording_progress() as task:

@@ -11,7 +11,6 @@ from rich.console import Console
 from rich.table import Table
 
 from anklelab.commands._progress import recording_progress
-from anklelab.data import load_session, summarize
 
 app = typer.Typer(help="Inspect sessions.", no_args_is_help=True)
 
@@ -69,6 +68,8 @@ def info(
     as_json: Annotated[bool, typer.Option("--json", help="Print the summary as JSON.")] = False,
 ) -> None:
     """Validate a session and summarise it: platform, rate, trials per timing point, truth."""
+    from anklelab.data import load_session, summarize
+
     with recording_progress() as task:
         summary = summarize(load_session(path, progress=task(f"reading {path.name}")))
     if as_json:

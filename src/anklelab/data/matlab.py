@@ -40,7 +40,6 @@ from typing import Any
 
 import h5py
 import numpy as np
-import scipy.io
 
 from anklelab.data._checks import (
     check_bench_tests,
@@ -115,6 +114,8 @@ def _load(path: Path) -> dict[str, Any]:
     if h5py.is_hdf5(str(path)):
         with h5py.File(path, "r") as f:
             return {k: _h5_value(f[k], f) for k in f if not k.startswith("#")}
+    import scipy.io  # only for pre-v7.3 files; slow to import
+
     try:
         return scipy.io.loadmat(str(path), simplify_cells=True)
     except Exception as exc:  # scipy raises many types for a file that is not a MAT file
