@@ -63,6 +63,8 @@ def demo(
         report, summary, comparisons = write_demo_report(out, settings, perturberator, capstan)
         step(1, 1)
     console = Console()
+    if not console.is_terminal:  # a log file or pipe: wide enough for the tables not to wrap
+        console = Console(width=120)
     console.print(_table("Paper 000, the Perturberator", comparisons["paper_000"]))
     console.print(_table("Paper 001, the capstan platform", comparisons["paper_001"]))
     console.print(
