@@ -42,7 +42,9 @@ def demo(
     quick: Annotated[
         bool, typer.Option("--quick", help="Small trial counts: a check in seconds.")
     ] = False,
-    seed: Annotated[int, typer.Option(help="Seed of every simulation and the bootstrap.")] = 0,
+    seed: Annotated[
+        int, typer.Option(min=0, help="Seed of every simulation and the bootstrap.")
+    ] = 0,
 ) -> None:
     """Run both papers' experiments on the digital twins and compare with the papers.
 
@@ -55,6 +57,8 @@ def demo(
     from anklelab.pipelines.demo import DemoSettings, run_capstan, run_perturberator
     from anklelab.report.demo import write_demo_report
 
+    if out.exists() and not out.is_dir():
+        raise typer.BadParameter(f"{out} exists and is not a directory", param_hint="--out")
     settings = DemoSettings.quick(seed) if quick else DemoSettings(seed=seed)
     with recording_progress(transient=False) as task:
         perturberator = run_perturberator(out, settings, task=task)
