@@ -15,14 +15,14 @@ from rich.table import Table
 from anklelab.commands._progress import recording_progress
 
 if TYPE_CHECKING:
-    from anklelab.report.demo import Comparison
+    from anklelab.report.comparisons import Comparison
 
 __all__ = ["demo"]
 
 
 def _table(title: str, rows: Sequence[Comparison]) -> Table:
     """Rows under a bold heading per group; numbers never wrap."""
-    from anklelab.report.demo import COLUMNS, grouped
+    from anklelab.report.comparisons import COLUMNS, grouped
 
     table = Table(title=title, box=box.SIMPLE_HEAD, title_justify="left", title_style="bold")
     for k, column in enumerate(COLUMNS):

@@ -1,6 +1,7 @@
 """Figures and the self-contained HTML report."""
 
-from anklelab.report.demo import Comparison, write_demo_report
+from anklelab.report.comparisons import Comparison
+from anklelab.report.demo import write_demo_report
 from anklelab.report.figures_walking import save_walking_figures, walking_figures
 from anklelab.report.html import Figure, Section, Table, figure_png, render_html, write_report
 from anklelab.report.paper_values import PAPER_000, PAPER_001, PaperValue
