@@ -5,7 +5,7 @@ import pytest
 from scipy.integrate import solve_ivp
 
 from anklelab.errors import NotFittedError, ParameterError
-from anklelab.ident import ImpedanceModel, fit_impedance
+from anklelab.ident import ImpedanceModel, fit_impedance, impedance_torque
 from anklelab.signals import kinematics
 
 FS = 1000.0
@@ -71,3 +71,83 @@ def test_estimator_interface():
         fit_impedance(kin[:2], torque)
     with pytest.raises(ParameterError, match="lengths"):
         fit_impedance(kin, torque, lengths=[200])
+
+
+# --- stiffness changing linearly within the window ----------------------------------------------
+
+K0, K1 = 300.0, 1000.0  # N·m/rad at the θ²-weighted time and N·m/rad/s: a human-like rise
+
+
+def _rising(n=100):
+    """Smooth ramp, its quadratic-fit derivatives and the torque of a linearly rising stiffness,
+    with ``t_c`` the θ²-weighted mean time of the first ``n`` samples."""
+    theta = _smooth_ramp()
+    kin = kinematics(theta, FS, 5)
+    t = np.arange(theta.size) / FS
+    centre = (theta[:n] ** 2 @ t[:n]) / (theta[:n] @ theta[:n])
+    torque = (K0 + K1 * (t - centre)) * theta + B * kin[1] + INERTIA * kin[2]
+    return kin, torque, t, centre
+
+
+def test_linear_stiffness_model_recovers_k0_at_the_weighted_time_slope_damping_and_inertia():
+    kin, torque, _, _ = _rising()
+    fit = fit_impedance(kin[:, :100], torque[:100], stiffness_model="linear", fs=FS)
+    assert fit.stiffness == pytest.approx(K0, rel=1e-9)
+    assert fit.stiffness_slope == pytest.approx(K1, rel=1e-9)
+    assert fit.damping == pytest.approx(B, rel=1e-7)
+    assert fit.inertia == pytest.approx(INERTIA, rel=1e-7)
+    assert fit.vaf == pytest.approx(100.0)
+
+
+def test_constant_model_bias_is_the_omitted_variable_bias_of_the_slope_term():
+    """Least squares with the term ``z = k1 (t - t_c) θ`` left out: the estimates move by
+    ``k1 (XᵀX)⁻¹ Xᵀ z``. ``t_c`` makes ``z`` orthogonal to θ, so the bias enters only through the
+    ramp's velocity and acceleration (which come early in the window, where ``t < t_c``): the
+    damping absorbs part of the rise and the stiffness comes out above its θ²-weighted value."""
+    kin, torque, t, centre = _rising()
+    x = kin[:, :100].T
+    z = (t[:100] - centre) * kin[0, :100]
+    assert x[:, 0] @ z == pytest.approx(0.0, abs=1e-12)
+    bias = K1 * np.linalg.lstsq(x, z, rcond=None)[0]
+    fit = fit_impedance(kin[:, :100], torque[:100])
+    assert [fit.stiffness, fit.damping, fit.inertia] == pytest.approx(
+        [K0 + bias[0], B + bias[1], INERTIA + bias[2]], rel=1e-9
+    )
+    assert bias[0] > 0.05 * K0 and bias[1] < -0.5 * B  # the pattern seen on the walking twin
+    assert fit.stiffness_slope == 0.0
+
+
+def test_linear_model_over_windows_and_repetitions_matches_separate_fits():
+    rng = np.random.default_rng(1)
+    kin0, torque0, t, _ = _rising()
+    gain = rng.uniform(0.8, 1.2, (5, 1))
+    kin = kin0[None] * gain[:, None]
+    torque = torque0 * gain + rng.normal(0, 0.05, (5, torque0.size))
+    fits = fit_impedance(kin, torque, lengths=[100, 75, 125], stiffness_model="linear", fs=FS)
+    assert fits.stiffness.shape == fits.stiffness_slope.shape == (3, 5)
+    for w, n in enumerate([100, 75, 125]):
+        for r in (0, 4):
+            theta = kin[r, 0, :n]
+            centre = (theta**2 @ t[:n]) / (theta @ theta)
+            x = np.column_stack([theta, kin[r, 1, :n], kin[r, 2, :n], (t[:n] - centre) * theta])
+            coef, *_ = np.linalg.lstsq(x, torque[r, :n], rcond=None)
+            got = [fits.stiffness, fits.damping, fits.inertia, fits.stiffness_slope]
+            assert np.allclose([g[w, r] for g in got], coef, rtol=1e-8)
+            res = torque[r, :n] - x @ coef
+            assert fits.vaf[w, r] == pytest.approx(100 * (1 - res.var() / torque[r, :n].var()))
+
+
+def test_linear_model_estimator_and_model_torque():
+    kin, torque, _, _ = _rising()
+    model = ImpedanceModel("linear", fs=FS).fit(kin[:, :100], torque[:100])
+    assert model.stiffness_slope_ == pytest.approx(K1)
+    assert np.allclose(model.predict(kin[:, :100]), torque[:100])
+    assert model.score(kin[:, :100], torque[:100]) == pytest.approx(100.0)
+    fit = fit_impedance(kin[:, :100], torque[:100], stiffness_model="linear", fs=FS)
+    assert np.allclose(impedance_torque(fit, kin[:, :100], FS), torque[:100])
+    with pytest.raises(ParameterError, match="fs"):
+        impedance_torque(fit, kin[:, :100])
+    with pytest.raises(ParameterError, match="fs"):
+        ImpedanceModel("linear")
+    with pytest.raises(ParameterError, match="stiffness_model"):
+        fit_impedance(kin, torque, stiffness_model="quadratic")  # type: ignore[arg-type]

@@ -5,12 +5,26 @@ window, for every bootstrap repetition, and checks 75 and 125 ms windows. Everyt
 vectorised: leading axes (repetitions, conditions) are solved at once, and the fits over
 several window lengths starting at the same sample come from one cumulative sum of the
 normal-equation terms.
+
+**Stiffness that changes within the window.** With ``stiffness="linear"`` the model is
+``T = I θ'' + b θ' + (k + k₁ (t - t_c)) θ``, the simplest time-varying impedance in the sense
+of the ensemble time-varying identification literature (MacNeil, Kearney & Hunter 1992, IEEE
+TBME; applied to the walking ankle by Rouse et al. 2014 and Lee & Hogan 2015, IEEE TNSRE):
+the window is short, so the stiffness is expanded to first order in time. ``t_c`` is the
+θ²-weighted mean time of the window, ``Σ t θ² / Σ θ²``, which makes ``Σ θ² (t - t_c) = 0``:
+``k`` is then exactly the θ²-weighted mean stiffness over the window (DESIGN.md section 5)
+whenever the stiffness is linear in time. A constant-``k`` fit measures that value only if the
+omitted term ``k₁ (t - t_c) θ`` is uncorrelated with ``θ'`` and ``θ''``; it is not for a
+ramp-and-hold perturbation (its velocity comes early in the window, where ``t < t_c``), so a
+rising stiffness is absorbed partly by the damping and inertia and biases ``k``. The model is
+fitted as ``(k - k₁ t_c) θ + k₁ t θ`` (regressors ``θ, θ', θ'', t θ``, one cumulative sum as
+above) and ``k`` recovered with the window's own ``t_c``.
 """
 
 from __future__ import annotations
 
 from collections.abc import Sequence
-from typing import NamedTuple
+from typing import Literal, NamedTuple
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -18,7 +32,10 @@ from numpy.typing import ArrayLike, NDArray
 from anklelab.errors import NotFittedError, ParameterError
 from anklelab.signals import vaf
 
-__all__ = ["ImpedanceFit", "ImpedanceModel", "fit_impedance"]
+__all__ = ["ImpedanceFit", "ImpedanceModel", "StiffnessModel", "fit_impedance", "impedance_torque"]
+
+StiffnessModel = Literal["constant", "linear"]
+"""How the stiffness may change within the window: ``k`` or ``k + k₁ (t - t_c)``."""
 
 
 class ImpedanceFit(NamedTuple):
@@ -27,19 +44,22 @@ class ImpedanceFit(NamedTuple):
     Attributes
     ----------
     stiffness : ndarray
-        ``k``, N·m/rad.
+        ``k``, N·m/rad: with the linear stiffness model its θ²-weighted mean over the window.
     damping : ndarray
         ``b``, N·m·s/rad.
     inertia : ndarray
         ``I``, kg·m².
     vaf : ndarray
         Variance of the torque accounted for by the model over the window, %.
+    stiffness_slope : ndarray
+        ``k₁``, N·m/rad/s (0 with the constant stiffness model).
     """
 
     stiffness: NDArray[np.float64]
     damping: NDArray[np.float64]
     inertia: NDArray[np.float64]
     vaf: NDArray[np.float64]
+    stiffness_slope: NDArray[np.float64]
 
 
 def _check(kinematics: ArrayLike, torque: ArrayLike) -> tuple[NDArray, NDArray]:
@@ -53,8 +73,30 @@ def _check(kinematics: ArrayLike, torque: ArrayLike) -> tuple[NDArray, NDArray]:
     return kin, tq
 
 
+def _sample_rate(fs: float | None) -> float:
+    if fs is None or not fs > 0:
+        raise ParameterError(
+            f"fs: the linear stiffness model needs the sample rate (Hz, > 0), got {fs!r}"
+        )
+    return float(fs)
+
+
+def _check_model(stiffness_model: str) -> bool:
+    """True for the linear stiffness model."""
+    if stiffness_model not in ("constant", "linear"):
+        raise ParameterError(
+            f"stiffness_model: expected 'constant' or 'linear', got {stiffness_model!r}"
+        )
+    return stiffness_model == "linear"
+
+
 def fit_impedance(
-    kinematics: ArrayLike, torque: ArrayLike, lengths: Sequence[int] | None = None
+    kinematics: ArrayLike,
+    torque: ArrayLike,
+    lengths: Sequence[int] | None = None,
+    *,
+    stiffness_model: StiffnessModel = "constant",
+    fs: float | None = None,
 ) -> ImpedanceFit:
     """Fit ``T = I θ'' + b θ' + k θ`` over windows that start at the first sample.
 
@@ -66,6 +108,12 @@ def fit_impedance(
         Torque, N·m.
     lengths : sequence of int, optional
         Window lengths in samples (each <= n_times). Omitted: one window, the whole record.
+    stiffness_model : {"constant", "linear"}
+        ``"linear"``: the stiffness is ``k + k₁ (t - t_c)`` within each window, ``t_c`` the
+        window's θ²-weighted mean time (see the module docstring); ``k`` is the stiffness at
+        ``t_c`` and ``k₁`` is returned as ``stiffness_slope``.
+    fs : float, optional
+        Sample rate, Hz (the time axis of the linear stiffness model; needed only by it).
 
     Returns
     -------
@@ -81,16 +129,31 @@ def fit_impedance(
     >>> fit = fit_impedance(kin, [1200.0, 2.0, 0.3] @ kin)
     >>> [round(float(v), 6) for v in fit[:3]]
     [1200.0, 2.0, 0.3]
+
+    A stiffness rising at 2000 N·m/rad/s; ``k`` is its θ²-weighted mean over the window:
+
+    >>> k_t = 1200.0 + 2000.0 * (t - 0.05)
+    >>> fit = fit_impedance(kin, k_t * th + [0, 2.0, 0.3] @ kin, stiffness_model="linear",
+    ...                     fs=1000.0)
+    >>> round(float(fit.stiffness), 6) == round(float(k_t @ th**2 / (th @ th)), 6)
+    True
+    >>> round(float(fit.stiffness_slope), 6), round(float(fit.damping), 6)
+    (2000.0, 2.0)
     """
     kin, tq = _check(kinematics, torque)
+    linear = _check_model(stiffness_model)
     n_times = tq.shape[-1]
     single = lengths is None
     sizes = np.array([n_times] if single else lengths, dtype=int)
-    if sizes.size == 0 or np.any((sizes < 3) | (sizes > n_times)):
+    if sizes.size == 0 or np.any((sizes < 3 + linear) | (sizes > n_times)):
         raise ParameterError(
-            f"lengths: expected window lengths between 3 and {n_times} samples, got {lengths!r}"
+            f"lengths: expected window lengths between {3 + linear} and {n_times} samples, "
+            f"got {lengths!r}"
         )
     x = np.moveaxis(kin, -2, -1)  # (..., n_times, 3)
+    if linear:
+        time_theta = np.arange(n_times) / _sample_rate(fs) * kin[..., 0, :]
+        x = np.concatenate([x, time_theta[..., None]], axis=-1)  # (..., n_times, 4)
     scale = np.sqrt((x[..., : sizes.max(), :] ** 2).mean(axis=-2, keepdims=True))
     scale = np.where(scale > 0, scale, 1.0)
     x = x / scale
@@ -100,26 +163,72 @@ def fit_impedance(
     sum_x = np.cumsum(x, axis=-2)[..., end, :]
     sum_t = np.cumsum(tq, axis=-1)[..., end]
     sum_tt = np.cumsum(tq**2, axis=-1)[..., end]
-    coef = np.linalg.solve(gram, cross[..., None])[..., 0]  # (..., n_windows, 3)
+    coef = np.linalg.solve(gram, cross[..., None])[..., 0]  # (..., n_windows, n_regressors)
     res_ss = sum_tt - 2 * (coef * cross).sum(-1) + np.einsum("...i,...ij,...j", coef, gram, coef)
     res_mean = (sum_t - (coef * sum_x).sum(-1)) / sizes
     total = sum_tt / sizes - (sum_t / sizes) ** 2
     with np.errstate(invalid="ignore", divide="ignore"):
         vaf_percent = 100.0 * (1.0 - (res_ss / sizes - res_mean**2) / total)
     coef = coef / scale
-    fields = (coef[..., 0], coef[..., 1], coef[..., 2], vaf_percent)
+    stiffness, slope = coef[..., 0], np.zeros_like(coef[..., 0])
+    if linear:
+        # (k - k1 t_c) θ + k1 t θ: the θ coefficient is moved to t_c = Σ t θ² / Σ θ², which the
+        # Gram matrix already holds (its (θ, t θ) and (θ, θ) entries, undone from the scaling)
+        centre = gram[..., 0, 3] / gram[..., 0, 0] * (scale[..., 3] / scale[..., 0])
+        slope = coef[..., 3]
+        stiffness = stiffness + slope * centre
+    fields = (stiffness, coef[..., 1], coef[..., 2], vaf_percent, slope)
     if single:
         return ImpedanceFit(*(f[..., 0] for f in fields))
     return ImpedanceFit(*(np.moveaxis(f, -1, 0) for f in fields))
 
 
+def impedance_torque(
+    fit: ImpedanceFit, kinematics: ArrayLike, fs: float | None = None
+) -> NDArray[np.float64]:
+    """Model torque of a fit, N·m, shape ``(..., n_times)``.
+
+    Parameters
+    ----------
+    fit : ImpedanceFit
+        One window's estimates, shaped like the leading axes of ``kinematics`` (or
+        broadcastable to them).
+    kinematics : array_like, shape (..., 3, n_times)
+        ``(θ, θ', θ'')`` over the window the fit describes, rad, rad/s, rad/s².
+    fs : float, optional
+        Sample rate, Hz; needed when the fit has a stiffness slope (its ``t_c`` is the
+        θ²-weighted mean time of these kinematics).
+    """
+    kin = np.asarray(kinematics, dtype=float)
+    theta = kin[..., 0, :]
+    slope = np.asarray(fit.stiffness_slope, dtype=float)[..., None]
+    stiffness = np.asarray(fit.stiffness, dtype=float)[..., None]
+    if np.any(slope != 0):
+        t = np.arange(theta.shape[-1]) / _sample_rate(fs)
+        weight = theta**2
+        centre = (weight @ t)[..., None] / weight.sum(axis=-1, keepdims=True)
+        stiffness = stiffness + slope * (t - centre)
+    damping = np.asarray(fit.damping, dtype=float)[..., None]
+    inertia = np.asarray(fit.inertia, dtype=float)[..., None]
+    return stiffness * theta + damping * kin[..., 1, :] + inertia * kin[..., 2, :]
+
+
 class ImpedanceModel:
     """Estimator of ``T = I θ'' + b θ' + k θ`` (scikit-learn style).
+
+    Parameters
+    ----------
+    stiffness_model : {"constant", "linear"}
+        Constant stiffness, or ``k + k₁ (t - t_c)`` (see :func:`fit_impedance`).
+    fs : float, optional
+        Sample rate, Hz (needed by the linear stiffness model).
 
     Attributes
     ----------
     stiffness_, damping_, inertia_ : ndarray
         Estimates with the leading shape of the data, N·m/rad, N·m·s/rad, kg·m².
+    stiffness_slope_ : ndarray
+        ``k₁``, N·m/rad/s (0 for the constant model).
     vaf_ : ndarray
         In-sample VAF, %.
 
@@ -134,6 +243,12 @@ class ImpedanceModel:
     (900.0, 100.0)
     """
 
+    def __init__(self, stiffness_model: StiffnessModel = "constant", fs: float | None = None):
+        if _check_model(stiffness_model):
+            _sample_rate(fs)
+        self.stiffness_model = stiffness_model
+        self.fs = fs
+
     def fit(self, kinematics: ArrayLike, torque: ArrayLike) -> ImpedanceModel:
         """Fit over the whole record.
 
@@ -144,17 +259,18 @@ class ImpedanceModel:
         torque : array_like, shape (..., n_times)
             Torque, N·m.
         """
-        fit = fit_impedance(kinematics, torque)
-        self.stiffness_, self.damping_, self.inertia_, self.vaf_ = fit
+        fit = fit_impedance(kinematics, torque, stiffness_model=self.stiffness_model, fs=self.fs)
+        self.stiffness_, self.damping_, self.inertia_, self.vaf_, self.stiffness_slope_ = fit
         return self
 
     def predict(self, kinematics: ArrayLike) -> NDArray[np.float64]:
         """Model torque, N·m, shape ``(..., n_times)``."""
         if not hasattr(self, "stiffness_"):
             raise NotFittedError(f"{type(self).__name__} is not fitted yet; call fit() first")
-        kin = np.asarray(kinematics, dtype=float)
-        coef = np.stack([self.stiffness_, self.damping_, self.inertia_], axis=-1)
-        return np.einsum("...i,...it->...t", coef, kin)
+        fit = ImpedanceFit(
+            self.stiffness_, self.damping_, self.inertia_, self.vaf_, self.stiffness_slope_
+        )
+        return impedance_torque(fit, kinematics, self.fs)
 
     def score(self, kinematics: ArrayLike, torque: ArrayLike) -> float:
         """Mean VAF of :meth:`predict` against ``torque``, %."""
