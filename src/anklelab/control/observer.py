@@ -25,9 +25,9 @@ import numpy as np
 from numba import njit
 from numpy.typing import NDArray
 
+from anklelab.control._platform_model import friction_feedforward, model_fields
 from anklelab.platforms.capstan import CapstanParameters, FrictionParameters
 from anklelab.sim.capstan._jit import FAST
-from anklelab.sim.capstan.plant import GRAVITY_M_S2
 
 __all__ = [
     "DisturbanceObserver",
@@ -123,7 +123,6 @@ def observer_constants(
     c = np.array([[1.0, 0.0], [0.0, 1.0], [-(w0**2), -2.0 * damping_ratio * w0]])
     d = np.array([[0.0], [0.0], [w0**2]])
     ad, bd, cd, dd = _tustin(a, b, c, d, 1.0 / fs)
-    plat = params.platform
     return ObserverConstants(
         ad=np.ascontiguousarray(ad),
         bd=np.ascontiguousarray(bd[:, 0]),
@@ -131,16 +130,8 @@ def observer_constants(
         dd=np.ascontiguousarray(dd[:, 0]),
         rest=np.linalg.solve(np.eye(2) - ad, bd[:, 0]),
         inertia=inertia_kgm2,
-        gravity_torque=plat.mass_kg * GRAVITY_M_S2 * plat.com_distance_m,
-        com_angle=plat.com_angle_rad,
-        coulomb_cw=f.coulomb_cw_nm,
-        coulomb_ccw=f.coulomb_ccw_nm,
-        viscous_cw=f.viscous_cw_nms_per_rad,
-        viscous_ccw=f.viscous_ccw_nms_per_rad,
-        smoothing_speed=smoothing_speed_rad_s,
-        capstan_ratio=params.capstan.ratio,
-        torque_per_amp=params.motor.torque_constant_nm_per_a * params.total_ratio,
         fs=fs,
+        **model_fields(params, f, smoothing_speed_rad_s),
     )
 
 
@@ -173,12 +164,8 @@ def observer_update(
     p0, p1 = state[0], state[1]
     accel = c.cd[2, 0] * p0 + c.cd[2, 1] * p1 + c.dd[2] * angle  # Q s^2 theta
     # friction at the raw encoder speed: the model torque is Q-filtered below like s^2 theta
-    wp = c.capstan_ratio * (angle - state[5]) * c.fs
+    friction = friction_feedforward(c, (angle - state[5]) * c.fs)
     state[5] = angle
-    tc = c.coulomb_cw if wp > 0 else c.coulomb_ccw
-    b = c.viscous_cw if wp > 0 else c.viscous_ccw
-    sign = min(max(wp / c.smoothing_speed, -1.0), 1.0)
-    friction = c.capstan_ratio * (tc * sign + b * wp)
     model = friction + c.gravity_torque * np.sin(angle + c.com_angle) - c.torque_per_amp * current
     if state[4] == 0.0:
         state[2], state[3], state[4] = c.rest[0] * model, c.rest[1] * model, 1.0

@@ -28,10 +28,10 @@ from numpy.typing import NDArray
 from pydantic import Field
 
 from anklelab._params import Parameters
+from anklelab.control._platform_model import friction_feedforward, model_fields
 from anklelab.platforms.capstan import CapstanParameters, FrictionParameters
 from anklelab.sim.capstan import linear_platform
 from anklelab.sim.capstan._jit import FAST
-from anklelab.sim.capstan.plant import GRAVITY_M_S2
 
 __all__ = [
     "ControlConstants",
@@ -179,8 +179,6 @@ def control_constants(
         raise ValueError(f"fs must be > 0 Hz; got {fs}")
     if not 0.0 <= friction_compensation <= 1.0:
         raise ValueError(f"friction_compensation must be in [0, 1]; got {friction_compensation}")
-    f = params.friction if friction is None else friction
-    plat = params.platform
     return ControlConstants(
         kp=gains.kp_nm_per_rad,
         ki=gains.ki_nm_per_rad_s,
@@ -188,18 +186,8 @@ def control_constants(
         error_limit=gains.integral_error_limit_rad,
         dt=1.0 / fs,
         velocity_alpha=-math.expm1(-2.0 * math.pi * gains.velocity_filter_hz / fs),
-        gravity_torque=plat.mass_kg * GRAVITY_M_S2 * plat.com_distance_m
-        if gravity_compensation
-        else 0.0,
-        com_angle=plat.com_angle_rad,
         friction_gain=friction_compensation,
-        coulomb_cw=f.coulomb_cw_nm,
-        coulomb_ccw=f.coulomb_ccw_nm,
-        viscous_cw=f.viscous_cw_nms_per_rad,
-        viscous_ccw=f.viscous_ccw_nms_per_rad,
-        smoothing_speed=smoothing_speed_rad_s,
-        capstan_ratio=params.capstan.ratio,
-        torque_per_amp=params.motor.torque_constant_nm_per_a * params.total_ratio,
+        **model_fields(params, friction, smoothing_speed_rad_s, gravity=gravity_compensation),
     )
 
 
@@ -207,16 +195,6 @@ def control_constants(
 def new_control_state(angle: float = 0.0) -> NDArray[np.float64]:
     """Fresh controller state ``[integral, previous angle, speed estimate, ticks]``."""
     return np.array([0.0, angle, 0.0, 0.0])
-
-
-@njit(cache=True, fastmath=FAST, error_model="numpy")
-def friction_feedforward(c: ControlConstants, speed: float) -> float:
-    """Modelled friction torque referred to the platform at platform speed ``speed``, N·m."""
-    wp = c.capstan_ratio * speed
-    s = min(max(wp / c.smoothing_speed, -1.0), 1.0)
-    tc = c.coulomb_cw if wp > 0 else c.coulomb_ccw
-    b = c.viscous_cw if wp > 0 else c.viscous_ccw
-    return c.capstan_ratio * (tc * s + b * wp)
 
 
 @njit(cache=True, fastmath=FAST, error_model="numpy", inline="always")
