@@ -30,7 +30,7 @@ import math
 from collections.abc import Callable
 from dataclasses import asdict, dataclass
 from pathlib import Path
-from typing import Any
+from typing import Any, Literal
 
 import numpy as np
 from pydantic import Field
@@ -80,7 +80,7 @@ SETPOINTS_DEG = (5.0, 10.0, 15.0)
 """Set-points of paper 001's Fig. 4, degrees."""
 COMPENSATIONS = ("none", "gravity + friction")
 """Controller variants: PID alone; PID with gravity and the identified friction compensated."""
-OBSERVER_TASKS = ("hold", "track")
+OBSERVER_TASKS: tuple[Literal["hold", "track"], ...] = ("hold", "track")
 """The platform holds level, or tracks a slow multisine, while the user pushes."""
 CHIRP_DEG = 5.0
 CHIRP = {"f0_hz": 0.2, "f1_hz": 5.0, "duration_s": 10.0}
@@ -246,37 +246,29 @@ class CapstanDemo:
 
     def control_document(self) -> dict[str, Any]:
         """``control.json``: every metric, encoder-based (``measured``) and true (``true``)."""
-
-        def chirp(m: ChirpMetrics) -> dict[str, Any]:
-            return {k: v.tolist() if isinstance(v, np.ndarray) else _finite(v)
-                    for k, v in asdict(m).items()}  # fmt: skip
-
         return {
             "setpoints": {
-                name: [
-                    {
-                        "measured": _finite_dict(asdict(r.measured)),
-                        "true": _finite_dict(asdict(r.true)),
-                    }
-                    for r in runs
-                ]
+                name: [{"measured": _jsonable(r.measured), "true": _jsonable(r.true)} for r in runs]
                 for name, runs in self.steps.items()
             },
             "chirp": {
-                name: {"measured": chirp(r.measured), "true": chirp(r.true)}
+                name: {"measured": _jsonable(r.measured), "true": _jsonable(r.true)}
                 for name, r in self.chirps.items()
             },
-            "observer": {task: asdict(m) for task, (_, m) in self.observers.items()},
+            "observer": {task: _jsonable(m) for task, (_, m) in self.observers.items()},
         }
 
 
-def _finite(value: Any) -> Any:
-    """JSON has no infinity: a bandwidth or settling time never reached becomes None."""
-    return None if isinstance(value, float) and not math.isfinite(value) else value
-
-
-def _finite_dict(values: dict[str, Any]) -> dict[str, Any]:
-    return {k: _finite(v) for k, v in values.items()}
+def _jsonable(metrics: Any) -> dict[str, Any]:
+    """A metrics dataclass as JSON values: arrays as lists, never-reached (inf) as None."""
+    return {
+        key: value.tolist()
+        if isinstance(value, np.ndarray)
+        else None
+        if isinstance(value, float) and not math.isfinite(value)
+        else value
+        for key, value in asdict(metrics).items()
+    }
 
 
 def _step(setup: CapstanSetup, degrees: float, seed: int) -> StepRun:
@@ -290,7 +282,14 @@ def _chirp(setup: CapstanSetup, seed: int) -> ChirpRun:
     result, measured = chirp_tracking(
         setup, amplitude_rad=math.radians(CHIRP_DEG), **CHIRP, seed=seed
     )
-    true = chirp_metrics(result["reference_rad"], result["angle_rad"], setup.fs, **CHIRP)
+    true = chirp_metrics(
+        result["reference_rad"],
+        result["angle_rad"],
+        setup.fs,
+        CHIRP["f0_hz"],
+        CHIRP["f1_hz"],
+        duration_s=CHIRP["duration_s"],
+    )
     return ChirpRun(result, measured, true)
 
 
@@ -313,33 +312,33 @@ def run_capstan(out: str | Path, settings: DemoSettings, *, task: Task = _no_tas
     bar(1, 1)
 
     model = friction.to_parameters()
-    setups = {
-        "none": CapstanSetup(params=params, gravity_compensation=False),
-        "gravity + friction": CapstanSetup(
-            params=params, friction_compensation=1.0, model_friction=model
-        ),
-    }
+    setups = dict(
+        zip(
+            COMPENSATIONS,
+            (
+                CapstanSetup(params=params, gravity_compensation=False),
+                CapstanSetup(params=params, friction_compensation=1.0, model_friction=model),
+            ),
+            strict=True,
+        )
+    )
     bar = task("capstan: set-point and chirp control")
-    total = len(setups) * (len(SETPOINTS_DEG) + 1)
-    steps: dict[str, list[StepRun]] = {}
+    total, done = len(setups) * (len(SETPOINTS_DEG) + 1), 0
+    steps: dict[str, list[StepRun]] = {name: [] for name in setups}
     chirps: dict[str, ChirpRun] = {}
     for name, setup in setups.items():
-        steps[name] = []
         for degrees in SETPOINTS_DEG:
             steps[name].append(_step(setup, degrees, seed))
-            bar(sum(map(len, steps.values())) + len(chirps), total)
+            bar(done := done + 1, total)
         chirps[name] = _chirp(setup, seed)
-        bar(sum(map(len, steps.values())) + len(chirps), total)
+        bar(done := done + 1, total)
 
     bar = task("capstan: torque observer")
     observed = CapstanSetup(params=params, model_friction=model)
-    observers = {}
+    observers: dict[str, tuple[SimulationResult, ObserverMetrics]] = {}
     for k, name in enumerate(OBSERVER_TASKS):
         observers[name] = observer_trial(
-            observed,
-            name,
-            duration_s=settings.observer_duration_s,
-            seed=seed,  # type: ignore[arg-type]
+            observed, name, duration_s=settings.observer_duration_s, seed=seed
         )
         bar(k + 1, len(OBSERVER_TASKS))
     demo = CapstanDemo(directory, ident, friction, steps, chirps, observers)

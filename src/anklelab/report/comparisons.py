@@ -9,11 +9,12 @@ measurement against the truth where the measurement estimates it.
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from anklelab.experiments.capstan import ChirpMetrics
 from anklelab.ident.bench import BenchStiffness, interpolate_stiffness
@@ -138,8 +139,9 @@ def grouped(rows: Sequence[Comparison]) -> dict[str, list[Comparison]]:
     return groups
 
 
-def _sd(values: Sequence[float]) -> float:
-    return float(np.std(values, ddof=1)) if len(values) > 1 else 0.0
+def _sd(values: ArrayLike) -> float:
+    values = np.asarray(values, dtype=float)
+    return float(np.std(values, ddof=1)) if values.size > 1 else 0.0
 
 
 def _ends(i: int, n: int, first: str, last: str) -> PaperValue | None:
@@ -154,9 +156,15 @@ def _ends(i: int, n: int, first: str, last: str) -> PaperValue | None:
 # ------------------------------------------------------------------------------- paper 000
 
 
+def _truth(demo: PerturberatorDemo) -> Mapping[str, Any]:
+    if demo.session.truth is None:
+        raise ValueError("the demo's session has no truth group (not simulated by the twin?)")
+    return demo.session.truth
+
+
 def perturberator_comparison(demo: PerturberatorDemo) -> list[Comparison]:
     """Paper 000 vs the Perturberator twin: servo loop, filters, walking impedance, bench."""
-    results, truth, bode = demo.results, demo.session.truth, demo.bode
+    results, truth, bode = demo.results, _truth(demo), demo.bode
     servo, walk = "servo position loop (PRBS)", "walking, dorsiflexion"
     rows = [
         Comparison(
@@ -263,7 +271,7 @@ def perturberator_comparison(demo: PerturberatorDemo) -> list[Comparison]:
 
 
 def _bench_rows(demo: PerturberatorDemo) -> list[Comparison]:
-    results, truth = demo.results, demo.session.truth
+    results, truth = demo.results, _truth(demo)
     if not results.bench:
         return []
     group = "bench tests; walking vs bench"
