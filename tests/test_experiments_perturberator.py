@@ -228,3 +228,19 @@ def test_simulate_command_writes_a_session(tmp_path):
     assert len(loaded.walking) == 5 and loaded.truth["reference"]
     bad = CliRunner().invoke(app, [*args[:4], "--format", "csv"])
     assert bad.exit_code != 0
+
+
+def test_bench_tests_come_with_the_prosthetic_foot_only(tmp_path):
+    """A human ankle has no bench law: its session has no bench tests unless asked for."""
+    kw = dict(trials_per_point=1, n_unperturbed=0, n_calibration=0, artefacts=False)
+    human = simulate_perturberator(seed=2, foot="human", time_courses=False, **kw)
+    assert human.bench == () and "bench" not in human.truth
+    assert human.provenance["settings"]["bench"] is False
+    asked = simulate_perturberator(seed=2, foot="human", bench=True, time_courses=False, **kw)
+    assert len(asked.bench) == 15 and asked.provenance["settings"]["bench"] is True
+    out = tmp_path / "human.h5"
+    args = ["simulate", "perturberator", "--out", str(out), "--foot", "human", "--bench",
+            "--trials-per-point", "1", "--unperturbed", "0", "--no-artefacts"]  # fmt: skip
+    result = CliRunner().invoke(app, args)
+    assert result.exit_code == 0, result.output
+    assert len(load_session(out).bench) == 15

@@ -68,8 +68,16 @@ def perturberator(
     no_artefacts: Annotated[
         bool, typer.Option("--no-artefacts", help="Ideal sensors and nominal gait.")
     ] = False,
+    bench: Annotated[
+        bool | None,
+        typer.Option(
+            "--bench/--no-bench",
+            help="Include the prosthesis's bench tests (default: with the prosthetic foot only).",
+        ),
+    ] = None,
 ) -> None:
-    """Paper 000's session on the Perturberator twin: calibration, walking and bench tests.
+    """Paper 000's session on the Perturberator twin: calibration, walking and (prosthetic
+    foot) bench tests.
 
     The session carries a truth group (parameters, reference stiffness per timing point and
     direction, true heel contacts and onsets, time courses) for validating analyses.
@@ -92,6 +100,7 @@ def perturberator(
             foot=foot,
             trials_per_point=trials_per_point,
             n_unperturbed=unperturbed,
+            bench=bench,
             artefacts=not no_artefacts,
             progress=task("simulating trials"),
         )

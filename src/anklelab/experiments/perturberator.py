@@ -2,11 +2,11 @@
 
 :func:`simulate_perturberator` runs the calibration trials (nobody on the plate, pseudorandom
 ramp-and-hold moves), the walking trials (heel-contact trigger, delay counter, ramp
-perturbations at the timing points, unperturbed trials in between, in random order) and the
-testing-machine bench tests, and records them as the 16-bit 1 kHz DAQ would (see
-:mod:`anklelab.sim.sensors`). The physics is documented in :mod:`anklelab.sim.drivetrain`
-(platform and servo), :mod:`anklelab.sim.foot` (how the foot's torque reaches the plate),
-:mod:`anklelab.sim.gait` and :mod:`anklelab.sim.forceplate_dynamics`.
+perturbations at the timing points, unperturbed trials in between, in random order) and, for
+the prosthetic foot, the testing-machine bench tests of the prosthesis, and records them as the
+16-bit 1 kHz DAQ would (see :mod:`anklelab.sim.sensors`). The physics is documented in
+:mod:`anklelab.sim.drivetrain` (platform and servo), :mod:`anklelab.sim.foot` (how the foot's
+torque reaches the plate), :mod:`anklelab.sim.gait` and :mod:`anklelab.sim.forceplate_dynamics`.
 
 Ground truth (``Session.truth``, SI units):
 
@@ -109,7 +109,7 @@ def simulate_perturberator(
     trials_per_point: int | None = None,
     n_unperturbed: int | None = None,
     n_calibration: int | None = None,
-    bench: bool = True,
+    bench: bool | None = None,
     artefacts: bool | Artefacts = True,
     substeps: int = 1,
     time_courses: bool = True,
@@ -132,8 +132,10 @@ def simulate_perturberator(
         Unperturbed walking trials (default ``walking.n_unperturbed``).
     n_calibration : int, optional
         Calibration trials (default ``calibration.n_trials``; 0 for none).
-    bench : bool
-        Include the testing-machine tests.
+    bench : bool, optional
+        Include the testing-machine tests of the prosthetic foot (paper 000, section 2.3).
+        Default: with the prosthetic foot only; a human ankle has no bench law, so its walking
+        estimates have nothing on the bench to be validated against.
     artefacts : bool or Artefacts
         Measurement artefacts: True all (default), False none, or a selection.
     substeps : int
@@ -157,6 +159,7 @@ def simulate_perturberator(
     """
     params = load_platform("perturberator") if params is None else params
     model = foot_model(foot, params)
+    bench = model.kind == "prosthetic" if bench is None else bench
     art = Artefacts.coerce(artefacts)
     setup = _Setup(params, art, StepDirectionPlan.from_params(params), substeps)
     rng_cal, rng_walk, rng_bench = np.random.default_rng(seed).spawn(3)
