@@ -16,6 +16,7 @@ from rich.console import Console
 from rich.table import Table
 
 from anklelab._atomic import write_text_atomic
+from anklelab.commands._options import SessionArgument, SettingsOption
 from anklelab.commands._progress import recording_progress
 
 if TYPE_CHECKING:
@@ -86,14 +87,9 @@ def _summary(results: WalkingResults) -> Table:
 
 
 def analyze(
-    session_path: Annotated[
-        Path, typer.Argument(metavar="SESSION", help="Session directory, .h5 or .mat file.")
-    ],
+    session_path: SessionArgument,
     out: Annotated[Path, typer.Option("--out", "-o", help="Directory for results and figures.")],
-    settings_file: Annotated[
-        Path | None,
-        typer.Option("--settings", help="TOML file of analysis settings (WalkingSettings keys)."),
-    ] = None,
+    settings_file: SettingsOption = None,
     filters_file: Annotated[
         Path | None,
         typer.Option(

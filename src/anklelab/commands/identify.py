@@ -10,6 +10,7 @@ import typer
 from rich.console import Console
 from rich.table import Table
 
+from anklelab.commands._options import SessionArgument, SettingsOption
 from anklelab.commands._progress import recording_progress
 
 app = typer.Typer(help="Identify platform models from recorded data.", no_args_is_help=True)
@@ -17,14 +18,9 @@ app = typer.Typer(help="Identify platform models from recorded data.", no_args_i
 
 @app.command("platform-filters")
 def platform_filters(
-    session_path: Annotated[
-        Path, typer.Argument(metavar="SESSION", help="Session directory, .h5 or .mat file.")
-    ],
+    session_path: SessionArgument,
     out: Annotated[Path, typer.Option("--out", "-o", help="The filter file (JSON) to write.")],
-    settings_file: Annotated[
-        Path | None,
-        typer.Option("--settings", help="TOML file of analysis settings (WalkingSettings keys)."),
-    ] = None,
+    settings_file: SettingsOption = None,
     inputs: Annotated[
         str | None,
         typer.Option(help="Input pathways, comma-separated: angle, velocity, acceleration."),

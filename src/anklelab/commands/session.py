@@ -3,13 +3,13 @@
 from __future__ import annotations
 
 import json
-from pathlib import Path
 from typing import Annotated, Any
 
 import typer
 from rich.console import Console
 from rich.table import Table
 
+from anklelab.commands._options import SessionArgument
 from anklelab.commands._progress import recording_progress
 
 app = typer.Typer(help="Inspect sessions.", no_args_is_help=True)
@@ -64,7 +64,7 @@ def _table(summary: dict[str, Any]) -> Table:
 
 @app.command("info")
 def info(
-    path: Annotated[Path, typer.Argument(help="Session directory, .h5 or .mat file.")],
+    path: SessionArgument,
     as_json: Annotated[bool, typer.Option("--json", help="Print the summary as JSON.")] = False,
 ) -> None:
     """Validate a session and summarise it: platform, rate, trials per timing point, truth."""
