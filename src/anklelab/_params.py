@@ -10,16 +10,23 @@ of range with one message that names the file and the dotted key.
 from __future__ import annotations
 
 import difflib
+import json
 import tomllib
 from collections.abc import Mapping
 from pathlib import Path
-from typing import Any, TypeVar
+from typing import Any, Literal, TypeVar
 
 from pydantic import BaseModel, ConfigDict, PrivateAttr, ValidationError
 
 from anklelab.errors import ParameterError
 
-__all__ = ["SOURCE_KINDS", "Parameters", "load_parameters", "parameters_from_mapping"]
+__all__ = [
+    "SOURCE_KINDS",
+    "Parameters",
+    "load_parameters",
+    "parameters_from_mapping",
+    "read_parameter_document",
+]
 
 SOURCE_KINDS = ("paper 000", "paper 001", "datasheet", "assumed")
 
@@ -146,11 +153,38 @@ def load_parameters(model: type[P], path: str | Path) -> P:
     Parameters
         A frozen instance; its ``sources`` give where each value comes from.
     """
+    data = read_parameter_document(path, "toml", what="parameter file")
+    return parameters_from_mapping(model, data, origin=str(path))
+
+
+def read_parameter_document(
+    path: str | Path, kind: Literal["toml", "json"], *, what: str
+) -> dict[str, Any]:
+    """Parse a TOML or JSON file whose top level is a table / object.
+
+    Parameters
+    ----------
+    path : str or Path
+        The file.
+    kind : {"toml", "json"}
+        Its syntax.
+    what : str
+        What the file is, for the message when it is missing (``"filter file"``).
+
+    Raises
+    ------
+    ParameterError
+        Naming the file: missing, not valid TOML/JSON (with the parser's position), or not a
+        table at the top level.
+    """
     path = Path(path)
     try:
-        data = tomllib.loads(path.read_text(encoding="utf-8"))
+        text = path.read_text(encoding="utf-8")
+        data = tomllib.loads(text) if kind == "toml" else json.loads(text)
     except FileNotFoundError:
-        raise ParameterError(f"{path}: parameter file not found") from None
-    except tomllib.TOMLDecodeError as exc:
-        raise ParameterError(f"{path}: not valid TOML: {exc}") from None
-    return parameters_from_mapping(model, data, origin=str(path))
+        raise ParameterError(f"{path}: {what} not found") from None
+    except (tomllib.TOMLDecodeError, json.JSONDecodeError) as exc:
+        raise ParameterError(f"{path}: not valid {kind.upper()}: {exc}") from None
+    if not isinstance(data, dict):
+        raise ParameterError(f"{path}: expected a JSON object, got {type(data).__name__}")
+    return data

@@ -27,7 +27,6 @@ integrated back to angle (exactly the encoder's, when the velocity column is its
 
 from __future__ import annotations
 
-import json
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -39,7 +38,7 @@ from numpy.typing import ArrayLike, NDArray
 from scipy.optimize import least_squares
 from scipy.signal import savgol_filter
 
-from anklelab._params import parameters_from_mapping
+from anklelab._params import parameters_from_mapping, read_parameter_document
 from anklelab.data.capstan_ident import IdentData, IdentRun
 from anklelab.errors import NotFittedError, ParameterError, SessionFormatError
 from anklelab.platforms.capstan import FrictionParameters
@@ -528,13 +527,7 @@ def read_friction_json(path: str | Path, *, stribeck_exponent: float = 2.0) -> F
     ParameterError
         Naming the file and the missing or invalid key.
     """
-    path = Path(path)
-    try:
-        data = json.loads(path.read_text(encoding="utf-8"))
-    except FileNotFoundError:
-        raise ParameterError(f"{path}: file not found; expected friction.json") from None
-    except json.JSONDecodeError as exc:
-        raise ParameterError(f"{path}: not valid JSON: {exc}") from None
+    data = read_parameter_document(path, "json", what="friction model (friction.json)")
 
     def get(*keys: str) -> Any:
         node = data

@@ -26,6 +26,7 @@ from scipy.fft import irfft, next_fast_len, rfft
 from scipy.linalg import eigh, solve, solve_toeplitz
 
 from anklelab._atomic import write_text_atomic
+from anklelab._params import read_parameter_document
 from anklelab._version import __version__
 from anklelab.errors import NotFittedError, ParameterError
 from anklelab.forceplate import CHANNELS
@@ -437,13 +438,5 @@ class PlatformFilters:
     @classmethod
     def load(cls, path: str | Path) -> PlatformFilters:
         """Read filters written by :meth:`save`."""
-        path = Path(path)
-        try:
-            data = json.loads(path.read_text(encoding="utf-8"))
-        except FileNotFoundError:
-            raise ParameterError(f"{path}: filter file not found") from None
-        except json.JSONDecodeError as exc:
-            raise ParameterError(f"{path}: not valid JSON: {exc}") from None
-        if not isinstance(data, dict):
-            raise ParameterError(f"{path}: expected a JSON object")
+        data = read_parameter_document(path, "json", what="filter file")
         return cls.from_dict(data, origin=str(path))
