@@ -148,6 +148,6 @@ def test_linear_model_estimator_and_model_torque():
     with pytest.raises(ParameterError, match="fs"):
         impedance_torque(fit, kin[:, :100])
     with pytest.raises(ParameterError, match="fs"):
-        ImpedanceModel("linear")
+        ImpedanceModel("linear").fit(kin[:, :100], torque[:100])
     with pytest.raises(ParameterError, match="stiffness_model"):
         fit_impedance(kin, torque, stiffness_model="quadratic")  # type: ignore[arg-type]

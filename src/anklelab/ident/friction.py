@@ -209,19 +209,24 @@ class FrictionIdentifier:
 
     # ------------------------------------------------------------------------- fitting
     def _check(self) -> None:
-        for name in (
-            "min_speed_rad_s",
-            "window_s",
-            "stribeck_exponent",
-            "chirp_min_speed_rad_s",
-            "derivative_window_s",
-            "low_speed_floor_rad_s",
-            "tail_s",
+        for name, low, strict in (
+            ("min_speed_rad_s", 0, True),
+            ("skip_s", 0, False),
+            ("window_s", 0, True),
+            ("chirp_min_speed_rad_s", 0, True),
+            ("derivative_window_s", 0, True),
+            ("low_speed_floor_rad_s", 0, True),
+            ("zero_torque_nm", 0, False),
+            ("tail_s", 0, True),
+            ("stribeck_exponent", 0, True),
+            ("substeps", 1, False),
+            ("iterations", 1, False),
         ):
-            if not getattr(self, name) > 0:
-                raise ValueError(f"{name} must be > 0; got {getattr(self, name)!r}")
-        if self.skip_s < 0 or self.zero_torque_nm < 0 or self.substeps < 1 or self.iterations < 1:
-            raise ValueError("skip_s and zero_torque_nm must be >= 0, substeps and iterations >= 1")
+            value = getattr(self, name)
+            if not (value > low if strict else value >= low):
+                raise ParameterError(
+                    f"{name}: expected a number {'>' if strict else '>='} {low}, got {value!r}"
+                )
 
     def fit(self, data: IdentData) -> FrictionIdentifier:
         """Fit every parameter from an identification session (see the module docstring)."""

@@ -244,8 +244,6 @@ class ImpedanceModel:
     """
 
     def __init__(self, stiffness_model: StiffnessModel = "constant", fs: float | None = None):
-        if _check_model(stiffness_model):
-            _sample_rate(fs)
         self.stiffness_model = stiffness_model
         self.fs = fs
 
