@@ -5,7 +5,16 @@ VENV := .venv
 BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
 
-.PHONY: demo test lint bench browser clean
+.PHONY: demo test lint bench browser clean numba-cache
+
+# numba's on-disk cache checks only the timestamp of a kernel's own file, not of the callees it
+# inlines from other files; so the cache lives in a directory named after a hash of every file
+# that holds or feeds a kernel, and a change to any of them starts a fresh cache.
+KERNEL_SOURCES := $(sort $(wildcard src/anklelab/sim/*.py src/anklelab/sim/*/*.py \
+  src/anklelab/control/*.py src/anklelab/experiments/_*.py) \
+  $(shell grep -rl --include='*.py' numba src/anklelab))
+KERNEL_HASH := $(shell cat $(KERNEL_SOURCES) | sha1sum | cut -c1-12)
+NUMBA_CACHE := $(CURDIR)/.numba_cache/$(KERNEL_HASH)
 
 $(STAMP): pyproject.toml
 	test -x $(BIN)/python || $(PYTHON) -m venv $(VENV)
@@ -26,11 +35,16 @@ browser:
 	  { apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq chromium >/dev/null; }; } || \
 	  echo "warning: chromium is not installed; browser tests will be skipped (failed on CI)"
 
-test: lint browser
-	NUMBA_CACHE_DIR=$(CURDIR)/.numba_cache $(BIN)/python -m pytest -q
+# drop the caches of older kernel sources
+numba-cache:
+	@mkdir -p $(NUMBA_CACHE)
+	@find .numba_cache -mindepth 1 -maxdepth 1 ! -name $(KERNEL_HASH) -exec rm -rf {} +
 
-bench: $(STAMP)
-	NUMBA_CACHE_DIR=$(CURDIR)/.numba_cache $(BIN)/python -m benchmarks
+test: lint browser numba-cache
+	NUMBA_CACHE_DIR=$(NUMBA_CACHE) $(BIN)/python -m pytest -q
+
+bench: $(STAMP) numba-cache
+	NUMBA_CACHE_DIR=$(NUMBA_CACHE) $(BIN)/python -m benchmarks
 
 clean:
 	rm -rf $(VENV) .numba_cache .pytest_cache build *.egg-info src/*.egg-info
