@@ -4,7 +4,7 @@ import json
 
 import numpy as np
 import pytest
-from scipy.signal import lfilter
+from scipy.signal import freqz, lfilter
 
 from anklelab.errors import NotFittedError, ParameterError
 from anklelab.forceplate import CHANNELS
@@ -91,6 +91,29 @@ def test_pinv_selects_an_order_for_a_low_pass_input_and_beats_the_direct_solutio
     assert forced.order_ == 3
 
 
+def test_per_input_lengths_match_least_squares_on_the_shorter_design():
+    """A 1-lag input (a static gain) beside a 20-lag one: the normal equations restricted to
+    the fitted terms, and zeros beyond each input's own length."""
+    rng = np.random.default_rng(5)
+    u = lfilter([1.0], [1.0, -0.7], rng.normal(size=(2, 6000)), axis=-1)
+    irf = _known_irf(n_out=3, n_in=2, n_lags=20)
+    irf[:, 0, 1:] = 0.0
+    y = _simulate(u, irf) + rng.normal(0, 0.1, (3, 6000))
+    est = ImpulseResponse([1, 20], method="toeplitz").fit(u, y)
+    assert est.irf_.shape == (3, 2, 20) and est.order_ == 21
+    assert np.all(est.irf_[:, 0, 1:] == 0.0)
+    uc, yc = u - u.mean(axis=1, keepdims=True), y - y.mean(axis=1, keepdims=True)
+    lagged = [np.concatenate([np.zeros(k), uc[1, : uc.shape[1] - k]]) for k in range(20)]
+    ols = np.linalg.lstsq(np.stack([uc[0], *lagged], axis=1), yc.T, rcond=None)[0].T
+    assert np.allclose(est.irf_[:, 0, 0], ols[:, 0], atol=5e-3)
+    assert np.allclose(est.irf_[:, 1], ols[:, 1:], atol=5e-3)
+    assert np.allclose(est.irf_, irf, atol=0.05)
+    with pytest.raises(ParameterError, match="one per input"):
+        ImpulseResponse([1, 20, 5]).fit(u, y)
+    with pytest.raises(ParameterError, match="n_lags"):
+        ImpulseResponse([1, 0]).fit(u, y)
+
+
 def test_not_fitted_and_bad_parameters():
     with pytest.raises(NotFittedError, match="ImpulseResponse"):
         ImpulseResponse().predict(np.zeros((1, 10)))
@@ -116,13 +139,21 @@ def _ramps(rng, n=20000, amplitude=0.035):
     return x
 
 
+def _mode(f_hz=60.0, zeta=0.1):
+    """Unit-gain second-order resonance (bilinear): the ``(b, a)`` of a lightly damped mode."""
+    w, c = 2 * np.pi * f_hz, 2 * FS
+    a0, a1, a2 = (
+        c * c + 2 * zeta * w * c + w * w,
+        2 * w * w - 2 * c * c,
+        c * c - 2 * zeta * w * c + w * w,
+    )
+    return np.array([1, 2, 1]) * w * w / a0, np.array([1, a1 / a0, a2 / a0])
+
+
 def _plate(angle, inertial, gravity, rng, noise=0.3):
     """Forces of an unloaded plate: acceleration through a lightly damped 60 Hz mode + gravity."""
     acc = np.gradient(np.gradient(angle, 1 / FS), 1 / FS)
-    w, z, dt = 2 * np.pi * 60.0, 0.1, 1 / FS
-    c = 2 / dt
-    a0, a1, a2 = c * c + 2 * z * w * c + w * w, 2 * w * w - 2 * c * c, c * c - 2 * z * w * c + w * w
-    ring = lfilter(np.array([1, 2, 1]) * w * w / a0, [1, a1 / a0, a2 / a0], acc)
+    ring = lfilter(*_mode(), acc)
     return (
         inertial[:, None] * ring + gravity[:, None] * angle + rng.normal(0, noise, (8, angle.size))
     )
@@ -156,6 +187,38 @@ def test_platform_filters_angle_pathway_captures_gravity(calibration):
     assert np.max(np.abs(acc_only.predict(hold)[:, -1] - truth)) > 0.2 * truth.max()
 
 
+def _band_response(irf, f_hz):
+    """Frequency response of FIR weights (..., n_lags) at ``f_hz``."""
+    return np.array([freqz(h, 1, worN=f_hz, fs=FS)[1] for h in irf.reshape(-1, irf.shape[-1])])
+
+
+def test_platform_filters_recover_the_physical_pathways(calibration):
+    """Static gain on the angle + a decaying 60 Hz resonance on the acceleration, both seen
+    through the 20 Hz low-pass: with a 1-lag angle pathway (the default) each pathway is the
+    true one within the band the data carry (1-15 Hz: acceleration within 1 % of the largest
+    inertial gain, angle within 2 % of the largest gravity gain). With an angle filter as long
+    as the acceleration's (the earlier default) the prediction is as good, but the angle pathway
+    takes over part of the acceleration's: the split is not determined by the data."""
+    angles, forces = calibration
+    f = np.linspace(1.0, 15.0, 15)
+    true_acc = INERTIAL[:, None] * freqz(*_mode(), worN=f, fs=FS)[1]
+    static = PlatformFilters().fit(angles[0], forces[0], fs=FS)
+    assert static.lags == (1, 100) and np.all(static.irf_[:, 0, 1:] == 0.0)
+    assert np.allclose(static.irf_[:, 0, 0], GRAVITY, atol=0.02 * GRAVITY.max())
+    acc = _band_response(static.irf_[:, 1], f)
+    assert np.max(np.abs(acc - true_acc)) < 0.01 * np.abs(INERTIAL).max()
+    assert np.allclose(static.irf_[:, 1].sum(axis=1), INERTIAL, atol=0.01 * INERTIAL.max())
+
+    equal = PlatformFilters(angle_lags=100).fit(angles[0], forces[0], fs=FS)
+    assert equal.lags == (100, 100)
+    held_out = np.stack(angles[1:]), np.stack(forces[1:])
+    assert abs(equal.score(*held_out) - static.score(*held_out)) < 0.05
+    angle = _band_response(equal.irf_[:, 0], f)
+    assert np.max(np.abs(angle - GRAVITY[:, None])) > 0.5 * GRAVITY.max()
+    acc = _band_response(equal.irf_[:, 1], f)
+    assert np.max(np.abs(acc - true_acc)) > 0.01 * np.abs(INERTIAL).max()
+
+
 def test_platform_filters_save_and_load_round_trip(calibration, tmp_path):
     angles, forces = calibration
     filters = PlatformFilters(("angle", "velocity", "acceleration"), n_lags=50).fit(
@@ -182,3 +245,20 @@ def test_platform_filters_bad_file_names_the_key(tmp_path):
         PlatformFilters.load(tmp_path / "missing.json")
     with pytest.raises(ParameterError, match="inputs"):
         PlatformFilters(("jerk",)).fit(np.zeros(100), np.zeros((8, 100)), fs=FS)
+    with pytest.raises(ParameterError, match="angle_lags"):
+        PlatformFilters(angle_lags=0).fit(np.zeros(100), np.zeros((8, 100)), fs=FS)
+
+
+def test_platform_filters_file_written_before_per_pathway_lengths_still_loads(calibration):
+    """Files without ``angle_lags`` were fitted with every pathway ``n_lags`` long."""
+    angles, forces = calibration
+    filters = PlatformFilters(n_lags=40, angle_lags=40).fit(angles[0], forces[0], fs=FS)
+    old = filters.to_dict()
+    del old["angle_lags"]
+    loaded = PlatformFilters.from_dict(old)
+    assert loaded.lags == (40, 40)
+    assert np.array_equal(loaded.predict(angles[1]), filters.predict(angles[1]))
+    new = PlatformFilters.from_dict(
+        PlatformFilters(n_lags=40).fit(angles[0], forces[0], fs=FS).to_dict()
+    )
+    assert new.lags == (1, 40) and new.irf_.shape == (8, 2, 40)

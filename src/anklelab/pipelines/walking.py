@@ -106,9 +106,11 @@ class WalkingSettings(Parameters):
         Unloaded span at the start of each walking file used to zero channels and motor angle.
     onset_min_amplitude_rad
         Smallest motor-angle excursion that counts as a perturbation.
-    filter_inputs, n_lags, filter_method, calibration_fit_trial
-        Platform filters: input pathways, length (samples), estimator, calibration trial
-        (index) they are fitted on; the other calibration trials score them.
+    filter_inputs, n_lags, angle_lags, filter_method, calibration_fit_trial
+        Platform filters: input pathways, length of the velocity/acceleration filters and of
+        the angle filter (samples; 1 = a static gain, see
+        :class:`~anklelab.ident.irf.PlatformFilters`), estimator, calibration trial (index)
+        they are fitted on; the other calibration trials score them.
     window_ms, sensitivity_windows_ms
         Impedance analysis window after the onset and the alternative windows checked.
     offset_reference_ms
@@ -153,6 +155,7 @@ class WalkingSettings(Parameters):
         ("angle", "acceleration"), min_length=1
     )
     n_lags: int = Field(100, ge=1)
+    angle_lags: int = Field(1, ge=1)
     filter_method: Literal["pinv", "toeplitz"] = "pinv"
     calibration_fit_trial: int = Field(0, ge=0)
     window_ms: float = Field(100.0, gt=0)
@@ -399,7 +402,7 @@ def fit_platform_filters(
     session : Session
         Needs at least one calibration recording.
     settings : WalkingSettings, optional
-        Filter settings (``filter_inputs``, ``n_lags``, ``filter_method``,
+        Filter settings (``filter_inputs``, ``n_lags``, ``angle_lags``, ``filter_method``,
         ``calibration_fit_trial``, ``cutoff_hz``, ``filter_order``, ``derivative_window``).
 
     Returns
@@ -424,6 +427,7 @@ def fit_platform_filters(
     filters = PlatformFilters(
         settings.filter_inputs,
         n_lags=settings.n_lags,
+        angle_lags=settings.angle_lags,
         method=settings.filter_method,
         cutoff_hz=settings.cutoff_hz,
         filter_order=settings.filter_order,

@@ -42,18 +42,26 @@ def _figure(rows: int, cols: int, width: float = 4.0, height: float = 2.6) -> tu
 
 
 def filters_figure(filters: PlatformFilters) -> Figure:
-    """Platform filters per input pathway: horizontal channels left, vertical right."""
-    n_inputs = len(filters.inputs)
-    fig, axes = _figure(n_inputs, 2)
-    lag_ms = np.arange(filters.n_lags) / filters.fs_ * 1000.0
-    for row, name in enumerate(filters.inputs):
-        for col, prefix in enumerate(("f", "fz")):
+    """Platform filters per input pathway: horizontal channels left, vertical right.
+
+    A pathway one lag long (the angle's, by default) is a static gain: one bar per channel.
+    """
+    fig, axes = _figure(len(filters.inputs), 2)
+    for row, (name, n_lags) in enumerate(zip(filters.inputs, filters.lags, strict=True)):
+        for col, vertical in enumerate((False, True)):
             ax = axes[row, col]
-            for c, channel in enumerate(filters.channels):
-                if channel.startswith("fz") == (prefix == "fz"):
-                    ax.plot(lag_ms, filters.irf_[c, row] * filters.fs_, label=channel, lw=1)
+            picked = [c for c, ch in enumerate(filters.channels) if ch.startswith("fz") == vertical]
+            ax.set_title(f"{name} → {'vertical' if vertical else 'horizontal'} channels")
             ax.axhline(0.0, color="0.7", lw=0.5)
-            ax.set_title(f"{name} → {'vertical' if col else 'horizontal'} channels")
+            if n_lags == 1:
+                labels = [filters.channels[c] for c in picked]
+                ax.bar(labels, filters.irf_[picked, row, 0], color="tab:gray")
+                ax.set_ylabel(f"static gain ({_UNITS[name]})")
+                continue
+            lag_ms = np.arange(n_lags) / filters.fs_ * 1000.0
+            for c in picked:
+                weights = filters.irf_[c, row, :n_lags] * filters.fs_
+                ax.plot(lag_ms, weights, label=filters.channels[c], lw=1)
             ax.set_xlabel("lag (ms)")
             ax.set_ylabel(f"impulse response ({_UNITS[name]}/s)")
             ax.legend(fontsize="small", ncols=2)
