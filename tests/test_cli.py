@@ -72,3 +72,24 @@ def test_usage_error_exits_2_without_traceback():
     )
     assert proc.returncode == 2
     assert "Missing option" in proc.stderr and "Traceback" not in proc.stderr
+
+
+def test_invalid_argument_value_exits_2_with_message():
+    # a value the library rejects (ParameterError) is a clean error, not a traceback
+    proc = subprocess.run(
+        [
+            sys.executable,
+            "-c",
+            "from anklelab.cli import run; run()",
+            "capstan",
+            "observe",
+            "--task",
+            "juggle",
+            "--duration",
+            "1",
+        ],
+        capture_output=True,
+        text=True,
+    )
+    assert proc.returncode == 2
+    assert "task must be 'hold' or 'track'" in proc.stderr and "Traceback" not in proc.stderr

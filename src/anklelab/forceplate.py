@@ -22,7 +22,7 @@ from numpy.typing import ArrayLike, NDArray
 from pydantic import Field
 
 from anklelab._params import Parameters
-from anklelab.errors import EventNotFoundError
+from anklelab.errors import EventNotFoundError, ParameterError
 
 __all__ = [
     "CHANNELS",
@@ -129,7 +129,7 @@ def resultants(
     """
     c = np.moveaxis(np.asarray(channels, dtype=float), axis, -1)
     if c.shape[-1] != len(CHANNELS):
-        raise ValueError(
+        raise ParameterError(
             f"channels: expected {len(CHANNELS)} channels on axis {axis}, got {c.shape[-1]}"
         )
     fx, fy, fz, mx, my, mz = np.moveaxis(c @ geometry.matrix().T, -1, 0)
@@ -263,7 +263,7 @@ def ankle_torque(
     [-28.0, 7.0, 42.0]
     """
     if ankle_height_m <= 0:
-        raise ValueError(f"ankle_height_m: expected > 0, got {ankle_height_m}")
+        raise ParameterError(f"ankle_height_m: expected > 0, got {ankle_height_m}")
     cop = np.asarray(load.cop_x, dtype=float)
     index = np.asarray(heel_contact)
     if np.any((index < 0) | (index >= cop.shape[-1])):

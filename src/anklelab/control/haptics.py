@@ -26,6 +26,7 @@ from numpy.typing import ArrayLike, NDArray
 from pydantic import Field
 
 from anklelab._params import Parameters
+from anklelab.errors import ParameterError
 
 __all__ = [
     "EnvironmentConstants",
@@ -97,9 +98,9 @@ class TerrainProfile:
     def __post_init__(self) -> None:
         d, h = np.asarray(self.distance_m, float), np.asarray(self.height_m, float)
         if d.ndim != 1 or d.shape != h.shape or d.size < 2:
-            raise ValueError("distance_m and height_m must be 1-D arrays of equal length >= 2")
+            raise ParameterError("distance_m and height_m must be 1-D arrays of equal length >= 2")
         if not np.all(np.diff(d) > 0) or not np.all(np.isfinite(h)):
-            raise ValueError("distance_m must be strictly increasing and height_m finite")
+            raise ParameterError("distance_m must be strictly increasing and height_m finite")
 
     @classmethod
     def hills(

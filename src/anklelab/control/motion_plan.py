@@ -17,7 +17,7 @@ from fractions import Fraction
 import numpy as np
 from numpy.typing import NDArray
 
-from anklelab.errors import SafetyLimitError
+from anklelab.errors import ParameterError, SafetyLimitError
 from anklelab.platforms.perturberator import PerturberatorParameters
 
 __all__ = ["StepDirectionPlan"]
@@ -91,7 +91,7 @@ class StepDirectionPlan:
         k = ticks * ratio.numerator // ratio.denominator
         phase = (ticks * ratio.numerator % ratio.denominator) / ratio.denominator
         if k[-1] + 1 >= planned.shape[1]:
-            raise ValueError(
+            raise ParameterError(
                 f"planned_rad: {planned.shape[1]} updates do not cover {n_ticks} ticks at "
                 f"{loop_rate_hz} Hz"
             )

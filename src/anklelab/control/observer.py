@@ -26,6 +26,7 @@ from numba import njit
 from numpy.typing import NDArray
 
 from anklelab.control._platform_model import friction_feedforward, model_fields
+from anklelab.errors import ParameterError
 from anklelab.platforms.capstan import CapstanParameters, FrictionParameters
 from anklelab.sim.capstan._jit import FAST
 
@@ -111,9 +112,9 @@ def observer_constants(
         Pinion speed over which the Coulomb sign ramps linearly from -1 to 1, rad/s.
     """
     if not 0 < cutoff_hz < fs / 2:
-        raise ValueError(f"cutoff_hz must be in (0, fs/2) = (0, {fs / 2}); got {cutoff_hz}")
+        raise ParameterError(f"cutoff_hz must be in (0, fs/2) = (0, {fs / 2}); got {cutoff_hz}")
     if not damping_ratio > 0:
-        raise ValueError(f"damping_ratio must be > 0; got {damping_ratio}")
+        raise ParameterError(f"damping_ratio must be > 0; got {damping_ratio}")
     f = params.friction if friction is None else friction
     if inertia_kgm2 is None:
         inertia_kgm2 = f.inertia_kgm2 * params.capstan.ratio**2 + params.platform.inertia_kgm2

@@ -13,6 +13,8 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from anklelab.errors import ParameterError
+
 __all__ = ["RampHold", "calibration_schedule"]
 
 
@@ -34,7 +36,7 @@ class RampHold:
 
     def __post_init__(self) -> None:
         if self.ramp_s <= 0 or self.return_s <= 0 or self.hold_s < 0:
-            raise ValueError(
+            raise ParameterError(
                 f"RampHold: ramp_s and return_s must be > 0 and hold_s >= 0; got {self}"
             )
 
@@ -86,7 +88,7 @@ def calibration_schedule(
     room = duration_s - 2 * quiet_s
     n = min(n_perturbations, int(room // move.duration_s))
     if n < 1:
-        raise ValueError(f"calibration: a {duration_s} s trial has no room for a perturbation")
+        raise ParameterError(f"calibration: a {duration_s} s trial has no room for a perturbation")
     gaps = rng.uniform(0.0, max_gap_s, n)
     free = room - n * move.duration_s
     if gaps.sum() > free:

@@ -29,6 +29,7 @@ from pydantic import Field
 
 from anklelab._params import Parameters
 from anklelab.control._platform_model import friction_feedforward, model_fields
+from anklelab.errors import ParameterError
 from anklelab.platforms.capstan import CapstanParameters, FrictionParameters
 from anklelab.sim.capstan import linear_platform
 from anklelab.sim.capstan._jit import FAST
@@ -106,13 +107,13 @@ def design_critically_damped(
     (317, 21.5)
     """
     if not settling_time_s > 0:
-        raise ValueError(f"settling_time_s must be > 0; got {settling_time_s}")
+        raise ParameterError(f"settling_time_s must be > 0; got {settling_time_s}")
     lin = linear_platform(params, params.user if with_user else None)
     w0 = 5.83 / settling_time_s
     kp = lin.inertia_kgm2 * w0**2 - lin.stiffness_nm_per_rad
     kd = 2.0 * lin.inertia_kgm2 * w0 - lin.damping_nms_per_rad
     if kp < 0 or kd < 0:
-        raise ValueError(
+        raise ParameterError(
             f"settling_time_s={settling_time_s} is too slow for this plant: the passive "
             "stiffness or damping alone already exceeds the critically damped gains"
         )
@@ -176,9 +177,11 @@ def control_constants(
         Pinion speed over which the Coulomb term's sign ramps linearly from -1 to 1, rad/s.
     """
     if not fs > 0:
-        raise ValueError(f"fs must be > 0 Hz; got {fs}")
+        raise ParameterError(f"fs must be > 0 Hz; got {fs}")
     if not 0.0 <= friction_compensation <= 1.0:
-        raise ValueError(f"friction_compensation must be in [0, 1]; got {friction_compensation}")
+        raise ParameterError(
+            f"friction_compensation must be in [0, 1]; got {friction_compensation}"
+        )
     return ControlConstants(
         kp=gains.kp_nm_per_rad,
         ki=gains.ki_nm_per_rad_s,

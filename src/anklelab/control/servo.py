@@ -18,6 +18,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy import optimize, signal
 
+from anklelab.errors import ParameterError
 from anklelab.platforms.perturberator import ServoParameters
 
 __all__ = [
@@ -96,7 +97,7 @@ def prbs(n_bits: int = 13, *, periods: int = 1, amplitude: float = 1.0) -> NDArr
     (15, 1)
     """
     if not 3 <= n_bits <= 16:
-        raise ValueError(f"n_bits: expected 3 ... 16, got {n_bits}")
+        raise ParameterError(f"n_bits: expected 3 ... 16, got {n_bits}")
     seq = signal.max_len_seq(n_bits)[0].astype(float)
     return np.tile(amplitude * (2 * seq - 1), periods)
 
@@ -128,7 +129,9 @@ def periodic_frf(
     y = np.asarray(response, dtype=float)
     n_periods = x.shape[-1] // period
     if n_periods <= skip:
-        raise ValueError(f"need more than {skip} periods of {period} samples; got {x.shape[-1]}")
+        raise ParameterError(
+            f"need more than {skip} periods of {period} samples; got {x.shape[-1]}"
+        )
     cut = slice(skip * period, n_periods * period)
     xs = x[..., cut].reshape(*x.shape[:-1], -1, period)
     ys = y[..., cut].reshape(*y.shape[:-1], -1, period)

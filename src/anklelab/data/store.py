@@ -22,7 +22,7 @@ from anklelab.data.directory import read_directory, write_directory
 from anklelab.data.hdf5 import is_hdf5, read_hdf5, write_hdf5
 from anklelab.data.matlab import read_matlab
 from anklelab.data.session import Recording, Session
-from anklelab.errors import SessionFormatError
+from anklelab.errors import ParameterError, SessionFormatError
 
 __all__ = ["diff_sessions", "load_session", "save_session", "session_hash", "session_kind"]
 
@@ -161,7 +161,7 @@ def save_session(
         return write_hdf5(session, path, overwrite=overwrite, progress=progress)
     if format == "dir":
         return write_directory(session, path, overwrite=overwrite, progress=progress)
-    raise ValueError(f"format: expected 'h5' or 'dir', got {format!r}")
+    raise ParameterError(f"format: expected 'h5' or 'dir', got {format!r}")
 
 
 def _recording_tree(recording: Recording, **fields: Any) -> dict[str, Any]:

@@ -22,6 +22,7 @@ from anklelab.control.haptics import TerrainProfile, VirtualEnvironment
 from anklelab.control.observer import observer_constants
 from anklelab.control.pid import PIDGains, control_constants, design_critically_damped
 from anklelab.control.safety import SafetyLimits
+from anklelab.errors import ParameterError
 from anklelab.experiments._capstan_loop import FAULTS, MODES, SIGNALS, closed_loop
 from anklelab.platforms import load_platform
 from anklelab.platforms.capstan import CapstanParameters, FrictionParameters
@@ -71,7 +72,7 @@ class FaultInjection:
 
     def __post_init__(self) -> None:
         if self.kind not in FAULTS or self.kind == "none":
-            raise ValueError(
+            raise ParameterError(
                 f"fault kind must be one of {sorted(set(FAULTS) - {'none'})}; got {self.kind!r}"
             )
 
@@ -188,16 +189,16 @@ def simulate_closed_loop(
         Signals :data:`~anklelab.experiments._capstan_loop.SIGNALS` at ``setup.fs``.
     """
     if mode not in MODES:
-        raise ValueError(f"mode must be one of {list(MODES)}; got {mode!r}")
+        raise ParameterError(f"mode must be one of {list(MODES)}; got {mode!r}")
     if mode in ("admittance", "impedance") and environment is None:
-        raise ValueError(f"mode {mode!r} needs an environment")
+        raise ParameterError(f"mode {mode!r} needs an environment")
 
     def signal(values: ArrayLike | None, name: str) -> NDArray[np.float64]:
         if values is None:
             return np.zeros(n_samples)
         array = np.ascontiguousarray(values, dtype=float)
         if array.shape != (n_samples,):
-            raise ValueError(f"{name} must have shape ({n_samples},); got {array.shape}")
+            raise ParameterError(f"{name} must have shape ({n_samples},); got {array.shape}")
         return array
 
     params = setup.params
@@ -538,7 +539,7 @@ def observer_trial(
     (0.1-0.5 Hz, ``track_amplitude_rad`` peak). Metrics ignore the first ``settle_s``.
     """
     if task not in ("hold", "track"):
-        raise ValueError(f"task must be 'hold' or 'track'; got {task!r}")
+        raise ParameterError(f"task must be 'hold' or 'track'; got {task!r}")
     rng = np.random.default_rng(seed)
     n = round(duration_s * setup.fs)
     torque = voluntary_torque(duration_s, setup.fs, rms_nm=torque_rms_nm, band_hz=band_hz, seed=rng)
@@ -643,7 +644,7 @@ def render_metrics(
     _, s_xt = csd(deflection, torque, fs, nperseg=nperseg)
     sel = (f >= band_hz[0]) & (f <= band_hz[1])
     if sel.sum() < 3:
-        raise ValueError(
+        raise ParameterError(
             f"band_hz {band_hz} holds fewer than 3 frequencies at {segment_s} s segments"
         )
     z, w = s_xt[sel] / s_xx[sel], 2 * np.pi * f[sel]

@@ -33,6 +33,7 @@ from anklelab.control.servo import (
     prbs,
     second_order_response,
 )
+from anklelab.errors import ParameterError
 from anklelab.platforms import load_platform
 from anklelab.platforms.perturberator import PerturberatorParameters
 from anklelab.sim.drivetrain import simulate_platform
@@ -158,7 +159,7 @@ def measure_servo_bode(
     fs = params.servo.position_loop_rate_hz
     hold = round(fs / clock_hz)
     if hold < 1 or not np.isclose(hold * clock_hz, fs):
-        raise ValueError(f"clock_hz: {clock_hz} Hz must divide the position-loop rate {fs} Hz")
+        raise ParameterError(f"clock_hz: {clock_hz} Hz must divide the position-loop rate {fs} Hz")
     period = (2**n_bits - 1) * hold
     command = np.repeat(prbs(n_bits, periods=periods, amplitude=amplitude_rad), hold)
     closed = simulate_platform(params, command[None], plate=False, record_loop=True, record_fs=fs)

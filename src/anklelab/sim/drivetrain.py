@@ -25,7 +25,7 @@ from enum import IntEnum
 import numpy as np
 from numpy.typing import NDArray
 
-from anklelab.errors import SafetyLimitError
+from anklelab.errors import ParameterError, SafetyLimitError
 from anklelab.platforms.perturberator import PerturberatorParameters
 from anklelab.sim import _kernels as K
 from anklelab.sim.artefacts import Artefacts
@@ -202,9 +202,11 @@ def simulate_platform(
     art = Artefacts() if artefacts is None else artefacts
     sv = params.servo
     if sv.velocity_loop_rate_hz != 2 * sv.position_loop_rate_hz:
-        raise ValueError("servo: the twin needs velocity_loop_rate_hz = 2 x position_loop_rate_hz")
+        raise ParameterError(
+            "servo: the twin needs velocity_loop_rate_hz = 2 x position_loop_rate_hz"
+        )
     if substeps < 1:
-        raise ValueError(f"substeps: expected >= 1, got {substeps}")
+        raise ParameterError(f"substeps: expected >= 1, got {substeps}")
     ref = np.ascontiguousarray(np.atleast_2d(reference), dtype=float)
     if not np.isfinite(ref).all():
         raise SafetyLimitError("reference: the drive refuses a non-finite position command")
@@ -212,7 +214,7 @@ def simulate_platform(
     fs_rec = params.daq.sample_rate_hz if record_fs is None else record_fs
     rec_every = round(sv.velocity_loop_rate_hz / fs_rec)
     if not np.isclose(rec_every * fs_rec, sv.velocity_loop_rate_hz) or rec_every % 2:
-        raise ValueError(f"record_fs: {fs_rec} Hz must divide the position-loop rate")
+        raise ParameterError(f"record_fs: {fs_rec} Hz must divide the position-loop rate")
     geometry = params.geometry
     hinge_height = geometry.ankle_height_m - geometry.misalignment_vertical_m
     pc = platform_constants(params, hinge_height_m=hinge_height, quantisation=art.quantisation)
@@ -224,7 +226,7 @@ def simulate_platform(
         g, fp, gait_fs = load.channels.transpose(0, 2, 1), load.scalars, load.fs
     inj = np.zeros((n_trials, 0)) if injection is None else np.atleast_2d(injection).astype(float)
     if inj.size and inj.shape != ref.shape:
-        raise ValueError(f"injection: expected shape {ref.shape}, got {inj.shape}")
+        raise ParameterError(f"injection: expected shape {ref.shape}, got {inj.shape}")
     fplate = sv.position_loop_rate_hz
     fpp = params.force_plate
     sos_v = mode_sos(fpp.vertical_natural_frequency_hz, fpp.damping_ratio, fplate)

@@ -42,6 +42,7 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy.interpolate import PchipInterpolator
 
+from anklelab.errors import ParameterError
 from anklelab.platforms.perturberator import PerturberatorParameters
 from anklelab.sim import _kernels as K
 from anklelab.sim.drivetrain import FootLoad
@@ -123,7 +124,7 @@ class FootModel:
 def foot_model(kind: str, params: PerturberatorParameters) -> FootModel:
     """The foot called ``kind`` ("prosthetic" or "human") with its laws from ``params``."""
     if kind not in ("prosthetic", "human"):
-        raise ValueError(f"foot: expected 'prosthetic' or 'human', got {kind!r}")
+        raise ParameterError(f"foot: expected 'prosthetic' or 'human', got {kind!r}")
     return FootModel(kind, params)  # type: ignore[arg-type]
 
 

@@ -24,6 +24,7 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy.interpolate import PchipInterpolator
 
+from anklelab.errors import ParameterError
 from anklelab.platforms.perturberator import GaitParameters
 
 __all__ = [
@@ -109,7 +110,7 @@ def sample_gait(
     )
     end = trials.contact_s + trials.stance_s
     if end.max() > g.trial_duration_s:
-        raise ValueError(
+        raise ParameterError(
             f"gait.trial_duration_s: {g.trial_duration_s} s is shorter than a simulated stance "
             f"ending at {end.max():.3f} s; lengthen it"
         )
@@ -171,7 +172,7 @@ def heel_contact_times(
     lo = np.zeros(len(trials))
     hi = trials.loading_s.copy()
     if np.any(_vertical(hi[:, None], trials, params)[:, 0] < threshold_n):
-        raise ValueError(
+        raise ParameterError(
             f"heel contact: the vertical GRF does not reach {threshold_n} N in loading"
         )
     for _ in range(60):

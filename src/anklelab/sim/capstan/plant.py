@@ -26,6 +26,7 @@ import numpy as np
 from numba import njit
 from numpy.typing import NDArray
 
+from anklelab.errors import ParameterError
 from anklelab.platforms.capstan import CapstanParameters, UserParameters
 from anklelab.sim.capstan._jit import FAST
 from anklelab.sim.capstan.friction import friction_step
@@ -144,7 +145,7 @@ class Stepping(NamedTuple):
 def stepping(c: PlantConstants, fs: float, max_step_s: float) -> Stepping:
     """Split a control period at ``fs`` Hz into equal sub-steps no longer than ``max_step_s``."""
     if not fs > 0 or not max_step_s > 0:
-        raise ValueError(f"fs and max_step_s must be > 0; got {fs}, {max_step_s}")
+        raise ParameterError(f"fs and max_step_s must be > 0; got {fs}, {max_step_s}")
     n_sub = max(1, math.ceil(1.0 / (fs * max_step_s) - 1e-9))
     h = 1.0 / (fs * n_sub)
     decay = math.exp(-h * c.resistance / c.inductance)

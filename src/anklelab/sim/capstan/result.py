@@ -12,6 +12,8 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from anklelab.errors import ParameterError
+
 __all__ = ["SimulationResult"]
 
 
@@ -42,7 +44,7 @@ class SimulationResult:
     def __post_init__(self) -> None:
         lengths = {len(v) for v in self.signals.values()}
         if len(lengths) > 1:
-            raise ValueError(f"signals must have equal lengths; got {sorted(lengths)}")
+            raise ParameterError(f"signals must have equal lengths; got {sorted(lengths)}")
 
     def __getitem__(self, name: str) -> NDArray[np.float64]:
         try:

@@ -6,6 +6,7 @@ import numpy as np
 from numba import njit
 from numpy.typing import ArrayLike, NDArray
 
+from anklelab.errors import ParameterError
 from anklelab.platforms import load_platform
 from anklelab.platforms.capstan import CapstanParameters, UserParameters
 from anklelab.sim.capstan.friction import friction_array
@@ -54,7 +55,7 @@ class CapstanTwin:
         max_step_s: float = 2e-4,
     ) -> None:
         if not max_step_s > 0:
-            raise ValueError(f"max_step_s must be > 0; got {max_step_s}")
+            raise ParameterError(f"max_step_s must be > 0; got {max_step_s}")
         self.params = load_platform("capstan") if params is None else params
         self.user = user
         self.coupled = coupled
@@ -127,10 +128,12 @@ class CapstanTwin:
         vol = np.zeros(n) if voluntary_torque_nm is None else np.asarray(voluntary_torque_nm, float)
         noise = np.zeros(n) if current_noise is None else np.asarray(current_noise, float)
         if vol.shape != (n,) or noise.shape != (n,):
-            raise ValueError("voluntary_torque_nm and current_noise must match current_a's length")
+            raise ParameterError(
+                "voluntary_torque_nm and current_noise must match current_a's length"
+            )
         x0 = self.rest_state(angle0) if state0 is None else np.array(state0, dtype=float)
         if x0.shape != (len(STATE_NAMES),):
-            raise ValueError(f"state0 must have shape ({len(STATE_NAMES)},); got {x0.shape}")
+            raise ParameterError(f"state0 must have shape ({len(STATE_NAMES)},); got {x0.shape}")
         states, extra = _open_loop(
             self.constants,
             self.friction_law,

@@ -5,6 +5,8 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
+from anklelab.errors import ParameterError
+
 __all__ = ["voluntary_torque"]
 
 
@@ -42,12 +44,12 @@ def voluntary_torque(
     """
     lo, hi = band_hz
     if not 0 < lo <= hi < fs / 2:
-        raise ValueError(f"band_hz must satisfy 0 < low <= high < fs/2; got {band_hz}")
+        raise ParameterError(f"band_hz must satisfy 0 < low <= high < fs/2; got {band_hz}")
     n = round(duration_s * fs)
     t = np.arange(n) / fs
     freqs = np.arange(np.ceil(lo * duration_s), np.floor(hi * duration_s) + 1) / duration_s
     if freqs.size == 0:
-        raise ValueError(f"band_hz {band_hz} holds no multiple of 1/duration_s")
+        raise ParameterError(f"band_hz {band_hz} holds no multiple of 1/duration_s")
     phases = np.random.default_rng(seed).uniform(0, 2 * np.pi, freqs.size)
     tau = np.sin(2 * np.pi * freqs[:, None] * t + phases[:, None]).sum(axis=0)
     tau *= rms_nm / np.sqrt(freqs.size / 2)
