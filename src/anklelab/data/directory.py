@@ -238,7 +238,7 @@ def _data_file(folder: Path, name: str, where: str) -> Path:
 
 
 # Each manifest row, checked, with the data file to read and how to build the trial from it.
-Row = tuple[Path, Callable[[Recording], Any]]
+Row = tuple[Path, Callable[..., Any]]
 
 
 def _manifest_rows(
@@ -257,7 +257,8 @@ def _manifest_rows(
 
 
 def _walking_rows(folder: Path) -> list[Row]:
-    rows, ids = [], []
+    rows: list[Row] = []
+    ids: list[tuple[int, str]] = []
     for line, where, row, path, extra in _manifest_rows(
         folder, "trials.csv", WALKING_MANIFEST_COLUMNS
     ):
@@ -281,7 +282,8 @@ def _walking_rows(folder: Path) -> list[Row]:
 
 
 def _bench_rows(folder: Path) -> list[Row]:
-    rows, ids = [], []
+    rows: list[Row] = []
+    ids: list[tuple[int, str]] = []
     for line, where, row, path, extra in _manifest_rows(
         folder, "tests.csv", BENCH_MANIFEST_COLUMNS
     ):

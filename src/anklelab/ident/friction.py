@@ -266,10 +266,10 @@ class FrictionIdentifier:
                     "directions (or a lower min_speed_rad_s, --min-speed)"
                 )
             pieces = []
-            for c in mine:
-                v = c.run.velocity_rad_s[c.start : c.stop]
-                angle = np.cumsum(c.run.velocity_rad_s[c.start : c.stop]) / fs
-                pieces.append((c, v, np.arange(v.size) / fs, angle - angle[0]))
+            for coast in mine:
+                v = coast.run.velocity_rad_s[coast.start : coast.stop]
+                angle = np.cumsum(v) / fs
+                pieces.append((coast, v, np.arange(v.size) / fs, angle - angle[0]))
             # linear start: w = w0_r - a (theta - theta0) - sign c t
             rows = sum(p[1].size for p in pieces)
             design = np.zeros((rows, 2 + len(pieces)))

@@ -90,8 +90,12 @@ def sensor_channels(wrench: NDArray[np.float64], geometry: PlateGeometry) -> NDA
     return np.einsum("cw,...wn->...cn", to_channels, wrench)
 
 
-def daq_quantize(values: NDArray[np.float64], full_scale: float, bits: int) -> NDArray[np.float64]:
+def daq_quantize(
+    values: NDArray[np.float64], full_scale: float | NDArray[np.float64], bits: int
+) -> NDArray[np.float64]:
     """Round to the steps of a ``bits``-bit converter spanning ``±full_scale`` (and clip).
+
+    ``full_scale`` may be an array broadcasting against ``values`` (one range per channel).
 
     Examples
     --------
