@@ -54,3 +54,9 @@ def test_observer_and_render(tmp_path):
 def test_bad_mode_is_rejected():
     result = runner.invoke(app, ["capstan", "render", "--mode", "teleport"])
     assert result.exit_code != 0 and "admittance or impedance" in result.output
+
+
+def test_control_rate_outside_the_supported_range_is_a_usage_error():
+    result = runner.invoke(app, ["capstan", "step", "--fs", "50"])
+    assert result.exit_code == 2
+    assert "--fs" in result.output

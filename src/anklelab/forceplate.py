@@ -133,7 +133,7 @@ def resultants(
             f"channels: expected {len(CHANNELS)} channels on axis {axis}, got {c.shape[-1]}"
         )
     fx, fy, fz, mx, my, mz = np.moveaxis(c @ geometry.matrix().T, -1, 0)
-    with np.errstate(invalid="ignore", divide="ignore"):
+    with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
         loaded = np.abs(fz) > min_fz_n
         ax = np.where(loaded, (fx * geometry.az0_m - my) / fz, np.nan)
         ay = np.where(loaded, (fy * geometry.az0_m + mx) / fz, np.nan)

@@ -21,7 +21,9 @@ app = typer.Typer(
 ParamsOption = Annotated[
     Path | None, typer.Option("--params", help="A capstan parameter file instead of the shipped.")
 ]
-RateOption = Annotated[float, typer.Option("--fs", help="Control rate, Hz (1000-10000).")]
+RateOption = Annotated[
+    float, typer.Option("--fs", min=1000.0, max=10000.0, help="Control rate, Hz (1000-10000).")
+]
 UserOption = Annotated[bool, typer.Option(help="Put the user's foot on the platform.")]
 GravityOption = Annotated[bool, typer.Option(help="Feed-forward gravity compensation.")]
 FrictionCompOption = Annotated[
