@@ -79,8 +79,8 @@ def _write_example_files(text: str, root: Path) -> list[str]:
     return written
 
 
-def _anklelab(args: list[str], cwd: Path, monkeypatch, capsys) -> tuple[int, str]:
-    """Run the ``anklelab`` entry point in-process in ``cwd``: (exit code, stderr)."""
+def _anklelab(args: list[str], cwd: Path, monkeypatch, capsys) -> tuple[int, str, str]:
+    """Run the ``anklelab`` entry point in-process in ``cwd``: (exit code, stdout, stderr)."""
     from anklelab.cli import run
 
     monkeypatch.chdir(cwd)
@@ -91,7 +91,8 @@ def _anklelab(args: list[str], cwd: Path, monkeypatch, capsys) -> tuple[int, str
         code = 0
     except SystemExit as exit:
         code = exit.code if isinstance(exit.code, int) else 1
-    return code, capsys.readouterr().err
+    captured = capsys.readouterr()
+    return code, captured.out, captured.err
 
 
 def test_worked_example_session_imports_and_its_commands_run(tmp_path, monkeypatch, capsys):
@@ -107,7 +108,7 @@ def test_worked_example_session_imports_and_its_commands_run(tmp_path, monkeypat
     ]
     assert [c[:2] for c in commands] == [["session", "info"], ["import", "my_session"]]
     for args in commands:
-        code, err = _anklelab(args, tmp_path, monkeypatch, capsys)
+        code, _, err = _anklelab(args, tmp_path, monkeypatch, capsys)
         assert code == 0, (args, err)
     assert (tmp_path / "my_session.h5").is_file()
 
@@ -126,7 +127,7 @@ def test_worked_example_errors_are_the_real_messages(tmp_path, monkeypatch, caps
             subprocess.run(shlex.split(edit), cwd=case, check=True)
         command = next(line for line in lines if line.startswith("$ anklelab "))
         shown = [line for line in lines if line.startswith("error: ")]
-        code, err = _anklelab(shlex.split(command)[2:], case, monkeypatch, capsys)
+        code, _, err = _anklelab(shlex.split(command)[2:], case, monkeypatch, capsys)
         assert code == 2, (command, err)
         assert err.strip().splitlines()[-1:] == shown, command
 
@@ -189,3 +190,25 @@ def test_settings_table_lists_every_setting_with_its_default():
     assert set(rows) == set(defaults)
     for key, value in defaults.items():
         assert json.loads(rows[key].strip()) == value, key
+
+
+def test_real_sized_session_commands_print_what_the_guide_shows(tmp_path, monkeypatch, capsys):
+    """own-data.md: example 02's directory, then `anklelab import` and `anklelab analyze`."""
+    text = OWN_DATA.read_text(encoding="utf-8")
+    block = next(body for info, body in _blocks(text) if "$ python examples/02_" in body)
+    lines = block.splitlines()
+    script = ROOT / lines[0].split()[2]
+    subprocess.run(
+        [sys.executable, str(script), "lab"], cwd=tmp_path, check=True, capture_output=True
+    )
+    shown_rows = [line for line in lines if re.match(r"\s+(dorsi|plantar)/\d+ ", line)]
+    commands = [shlex.split(line)[2:] for line in lines if line.startswith("$ anklelab ")]
+    assert [c[0] for c in commands] == ["import", "analyze"]
+    printed = ""
+    for args in commands:
+        code, out, err = _anklelab(args, tmp_path / "lab", monkeypatch, capsys)
+        assert code == 0, (args, err)
+        printed += out
+    rows = [line for line in printed.splitlines() if re.match(r"\s+(dorsi|plantar)/\d+ ", line)]
+    assert len(shown_rows) == 8
+    assert _same_within("\n".join(shown_rows), "\n".join(rows), rel=0.01), printed
