@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from anklelab.errors import ParameterError
-from anklelab.signals import lowpass, vaf
+from anklelab.signals import lowpass, lowpass_min_samples, vaf
 
 FS = 1000.0
 
@@ -60,3 +60,14 @@ def test_vaf_per_signal_and_pooled():
     assert pooled == pytest.approx(100 * (1 - noise.var(axis=1).sum() / y.var(axis=1).sum()))
     # an offset in the prediction does not count (each channel's mean is removed)
     assert np.allclose(vaf(y, y + 7.0), 100.0)
+
+
+@pytest.mark.parametrize("order", [1, 4, 5])
+def test_too_short_signal_names_the_minimum_length(order):
+    need = lowpass_min_samples(FS, 20.0, order=order)
+    assert need == 3 * (order + 1) + 1  # scipy's padlen for a Butterworth design, plus one
+    assert lowpass(np.ones((2, need)), FS, order=order) == pytest.approx(1.0)
+    with pytest.raises(ParameterError, match=rf"x: {need - 1} samples .*at least {need}"):
+        lowpass(np.ones((2, need - 1)), FS, order=order)
+    with pytest.raises(ParameterError, match="x: 5 samples along axis 0"):
+        lowpass(np.ones((5, 100)), FS, order=order, axis=0)

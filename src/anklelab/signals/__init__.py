@@ -3,7 +3,7 @@
 from anklelab.signals.derivatives import derivative, kinematics
 from anklelab.signals.epochs import Trials, bootstrap_weights, epoch, stack_recordings
 from anklelab.signals.events import NOT_FOUND, Onsets, heel_contact, perturbation_onset
-from anklelab.signals.filters import lowpass
+from anklelab.signals.filters import lowpass, lowpass_min_samples
 from anklelab.signals.metrics import vaf
 
 __all__ = [
@@ -16,6 +16,7 @@ __all__ = [
     "heel_contact",
     "kinematics",
     "lowpass",
+    "lowpass_min_samples",
     "perturbation_onset",
     "stack_recordings",
     "vaf",

@@ -10,12 +10,53 @@ from scipy.signal import butter, sosfiltfilt
 
 from anklelab.errors import ParameterError
 
-__all__ = ["lowpass"]
+__all__ = ["lowpass", "lowpass_min_samples"]
 
 
 @lru_cache(maxsize=32)
 def _butter_sos(order: int, cutoff_hz: float, fs: float) -> NDArray[np.float64]:
     return butter(order, cutoff_hz, btype="low", output="sos", fs=fs)
+
+
+def _check(fs: float, cutoff_hz: float, order: int) -> NDArray[np.float64]:
+    if not 0 < cutoff_hz < fs / 2:
+        raise ParameterError(
+            f"cutoff_hz: expected 0 < cutoff_hz < fs/2 = {fs / 2:g} Hz, got {cutoff_hz!r}"
+        )
+    if int(order) != order or order < 1:
+        raise ParameterError(f"order: expected a positive integer, got {order!r}")
+    return _butter_sos(int(order), float(cutoff_hz), float(fs))
+
+
+def _padlen(sos: NDArray[np.float64]) -> int:
+    """Samples :func:`scipy.signal.sosfiltfilt` pads each end with (its default ``padlen``)."""
+    first_order = min(int((sos[:, 2] == 0).sum()), int((sos[:, 5] == 0).sum()))
+    return 3 * (2 * len(sos) + 1 - first_order)
+
+
+def lowpass_min_samples(fs: float, cutoff_hz: float = 20.0, *, order: int = 4) -> int:
+    """Shortest signal :func:`lowpass` can filter: one more than its edge padding, samples.
+
+    The forward-backward filter extends each end of the signal by an odd reflection of
+    ``padlen = 3 (order + 1)`` samples (SciPy's default for a Butterworth design), so the
+    signal must be longer than that.
+
+    Parameters
+    ----------
+    fs, cutoff_hz, order
+        As in :func:`lowpass`.
+
+    Returns
+    -------
+    int
+        Minimum number of samples along the time axis.
+
+    Examples
+    --------
+    >>> lowpass_min_samples(1000.0, 20.0, order=4)
+    16
+    """
+    return _padlen(_check(fs, cutoff_hz, order)) + 1
 
 
 def lowpass(
@@ -42,6 +83,12 @@ def lowpass(
     ndarray
         Filtered signals, same shape as ``x``.
 
+    Raises
+    ------
+    ParameterError
+        If ``x`` has no more samples along ``axis`` than the edge padding (see
+        :func:`lowpass_min_samples`).
+
     Examples
     --------
     A constant passes unchanged and a 200 Hz tone is removed:
@@ -52,10 +99,13 @@ def lowpass(
     >>> bool(np.allclose(y[100:-100], 1.0, atol=1e-3))
     True
     """
-    if not 0 < cutoff_hz < fs / 2:
+    sos = _check(fs, cutoff_hz, order)
+    x = np.asarray(x, dtype=float)
+    n, padlen = (x.shape[axis] if x.ndim else 1), _padlen(sos)
+    if n <= padlen:
         raise ParameterError(
-            f"cutoff_hz: expected 0 < cutoff_hz < fs/2 = {fs / 2:g} Hz, got {cutoff_hz!r}"
+            f"x: {n} samples along axis {axis}; the zero-phase Butterworth low-pass (order "
+            f"{order}, cutoff {cutoff_hz:g} Hz) needs at least {padlen + 1} (it pads each end "
+            f"with padlen = {padlen} samples)"
         )
-    if int(order) != order or order < 1:
-        raise ParameterError(f"order: expected a positive integer, got {order!r}")
-    return sosfiltfilt(_butter_sos(int(order), float(cutoff_hz), float(fs)), x, axis=axis)
+    return sosfiltfilt(sos, x, axis=axis)
