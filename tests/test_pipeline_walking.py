@@ -364,6 +364,71 @@ def test_no_unperturbed_trials_is_a_clear_error():
         analyze_walking(mini.session)
 
 
+def _truncated(rec, n):
+    return Recording(rec.name, {name: column[:n] for name, column in rec.columns.items()})
+
+
+def _with_walking(session, walking):
+    return Session(session.info, session.calibration, tuple(walking), session.bench)
+
+
+def _shortened_walking(session, indices, n):
+    return _with_walking(
+        session,
+        [
+            WalkingTrial(w.trial, _truncated(w.recording, n), w.perturbed, w.direction, w.delay_ms)
+            if i in indices
+            else w
+            for i, w in enumerate(session.walking)
+        ],
+    )
+
+
+@pytest.fixture(scope="module")
+def small():
+    return MiniSession(GEOMETRIES["+x"], n_per_point=4, n_unperturbed=8, delays=(200.0,), seed=7)
+
+
+def test_short_walking_trials_are_dropped_with_the_reason(small):
+    session = _shortened_walking(small.session, {0, 1}, 5)
+    result = analyze_walking(session, WalkingSettings(bootstrap_reps=10))
+    log = result.stance.drop_log
+    assert log[0] == log[1] == ("recording shorter than the 50 ms baseline",)
+    assert sum(bool(r) for r in log) == 2 and result.timing_points
+    # a baseline shorter than the low-pass's edge padding: the low-pass is the binding limit
+    settings = WalkingSettings(bootstrap_reps=10, baseline_ms=5.0)
+    log = analyze_walking(_shortened_walking(small.session, {0}, 10), settings).stance.drop_log
+    assert log[0] == ("recording shorter than the 16 samples the low-pass needs",)
+
+
+def test_only_short_walking_trials_is_a_clear_error_naming_them(small):
+    session = _shortened_walking(small.session, set(range(len(small.session.walking))), 5)
+    with pytest.raises(
+        SessionFormatError, match=r"no walking trial is long enough.*50 ms baseline \(16: t0.csv"
+    ):
+        analyze_walking(session)
+
+
+def test_no_usable_perturbed_trials_is_a_clear_error(small):
+    walking = [w for w in small.session.walking if not w.perturbed]
+    with pytest.raises(SessionFormatError, match="no usable perturbed trials"):
+        analyze_walking(_with_walking(small.session, walking))
+
+
+@pytest.mark.parametrize("index", [0, 2])  # the trial the filters are fitted on, a held-out one
+def test_short_calibration_trial_is_a_clear_error_naming_the_file(small, index):
+    calibration = list(small.session.calibration)
+    calibration[index] = _truncated(calibration[index], 60)
+    session = Session(small.session.info, tuple(calibration), small.session.walking)
+    name = calibration[index].name
+    with pytest.raises(SessionFormatError, match=rf"calibration/{name}: 60 samples .*at least 102"):
+        analyze_walking(session)
+    # previously fitted filters are scored on the session's calibration trials: same check
+    filters = analyze_walking(small.session, WalkingSettings(bootstrap_reps=2)).filters
+    with pytest.raises(SessionFormatError, match=rf"calibration/{name}: 60 samples"):
+        analyze_walking(session, filters=filters)
+
+
 def test_settings_are_validated():
     with pytest.raises(ValueError, match="derivative_window"):
         WalkingSettings(derivative_window=4)

@@ -27,7 +27,7 @@ trial manifest); no number of the digital twin is assumed.
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Literal
@@ -38,7 +38,7 @@ from pydantic import Field, model_validator
 
 from anklelab._params import Parameters, load_parameters
 from anklelab._version import __version__
-from anklelab.data.session import Session, WalkingTrial
+from anklelab.data.session import Recording, Session, WalkingTrial
 from anklelab.errors import ParameterError, SessionFormatError
 from anklelab.forceplate import (
     CHANNELS,
@@ -62,6 +62,7 @@ from anklelab.signals import (
     heel_contact,
     kinematics,
     lowpass,
+    lowpass_min_samples,
     perturbation_onset,
     stack_recordings,
 )
@@ -433,14 +434,36 @@ def fit_platform_filters(
         filter_order=settings.filter_order,
         derivative_window=settings.derivative_window,
     )
+    _check_calibration_lengths(filters, calibration, fs)
     fit_rec = calibration[fit_index]
     filters.fit(fit_rec["motor_angle"], fit_rec.stack(CHANNELS), fs=fs)
     held_out = [rec for i, rec in enumerate(calibration) if i != fit_index] or [fit_rec]
     return (filters, *_score_filters(filters, held_out))
 
 
+def _check_calibration_lengths(
+    filters: PlatformFilters, recordings: Sequence[Recording], fs: float
+) -> None:
+    """Every calibration file must be long enough to fit and score ``filters`` (else name it).
+
+    Fitting needs more samples than the filters have weights per channel, and the zero-phase
+    low-pass needs more samples than its edge padding.
+    """
+    weights = sum(filters.lags)
+    filtered = lowpass_min_samples(fs, filters.cutoff_hz, order=filters.filter_order)
+    need = max(weights + 1, filtered, filters.derivative_window)
+    for rec in recordings:
+        if rec.n_samples < need:
+            raise SessionFormatError(
+                f"calibration/{rec.name}: {rec.n_samples} samples is too short for the "
+                f"platform filters: every calibration trial needs at least {need} (more than "
+                f"the filters' {weights} weights per channel, and at least {filtered} for the "
+                f"order-{filters.filter_order} {filters.cutoff_hz:g} Hz zero-phase low-pass)"
+            )
+
+
 def _score_filters(
-    filters: PlatformFilters, recordings: list[Any]
+    filters: PlatformFilters, recordings: Sequence[Recording]
 ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     scores = [filters.vaf(rec["motor_angle"], rec.stack(CHANNELS)) for rec in recordings]
     pooled = np.array([s[0] for s in scores])
@@ -470,6 +493,17 @@ def _stance_trials(session: Session, settings: WalkingSettings, filters: Platfor
         [w.recording for w in walking], ("motor_angle", "ankle_angle", *CHANNELS)
     )
     n_base = max(1, round(settings.baseline_ms * fs / 1000.0))
+    n_filter = lowpass_min_samples(fs, settings.cutoff_hz, order=settings.filter_order)
+    base, thr = f"{settings.baseline_ms:g} ms", f"{settings.heel_contact_threshold_n:g} N"
+    too_short = [
+        (lengths <= n_base, f"recording shorter than the {base} baseline"),
+        (lengths < n_filter, f"recording shorter than the {n_filter} samples the low-pass needs"),
+    ]
+    if all(_first_reasons(too_short, len(walking))):
+        raise SessionFormatError(
+            "walking/trials.csv: no walking trial is long enough to analyse: "
+            + _drop_summary(_first_reasons(too_short, len(walking)), walking)
+        )
     raw -= raw[..., :n_base].mean(axis=-1, keepdims=True)  # the ankle angle is re-zeroed later
     motor = raw[:, 0]
     sagittal = _sagittal_matrix(info.force_plate)
@@ -510,10 +544,9 @@ def _stance_trials(session: Session, settings: WalkingSettings, filters: Platfor
     sign = np.array([{"dorsi": 1.0, "plantar": -1.0}.get(w.direction, 0.0) for w in walking])
     onset = np.where(found, onsets.index, event)
     offset = np.round(onset).astype(np.int64) - event
-    base, thr = f"{settings.baseline_ms:g} ms", f"{settings.heel_contact_threshold_n:g} N"
     log = _first_reasons(
         [
-            (lengths <= n_base, f"recording shorter than the {base} baseline"),
+            *too_short,
             (contact < 0, f"no heel contact: vertical force never held {thr}"),
             (contact <= n_base, f"heel contact within the first {base} (no unloaded baseline)"),
             (~cop_defined, "centre of pressure undefined at heel contact"),
@@ -709,14 +742,21 @@ def analyze_walking(
                 f"filters: fitted at {filters.fs_:g} Hz on channels {filters.channels}; the "
                 f"session is sampled at {fs:g} Hz with channels {CHANNELS}"
             )
-        filter_vaf, filter_vaf_by_channel = _score_filters(filters, list(session.calibration))
+        _check_calibration_lengths(filters, session.calibration, fs)
+        filter_vaf, filter_vaf_by_channel = _score_filters(filters, session.calibration)
     report(STEPS[1])
     stance = _stance_trials(session, settings, filters)
     unperturbed = stance["none"]
+    drops = f"drop reasons: {_drop_summary(stance.drop_log, session.walking)}"
     if len(unperturbed) == 0:
         raise SessionFormatError(
             "walking/trials.csv: no usable unperturbed trials, so the walking profile cannot be "
-            f"removed; drop reasons: {_drop_summary(stance)}"
+            f"removed; {drops}"
+        )
+    if len(unperturbed) == len(stance):
+        raise SessionFormatError(
+            f"walking/trials.csv: no usable perturbed trials, so no impedance can be estimated; "
+            f"{drops}"
         )
     report(STEPS[2])
     rng = np.random.default_rng(settings.seed)
@@ -737,9 +777,16 @@ def analyze_walking(
     )
 
 
-def _drop_summary(trials: Trials) -> str:
-    counts: dict[str, int] = {}
-    for reasons in trials.drop_log:
+def _drop_summary(
+    drop_log: Sequence[tuple[str, ...]], walking: Sequence[WalkingTrial], shown: int = 3
+) -> str:
+    """Each drop reason with its count and the first ``shown`` files it applies to."""
+    files: dict[str, list[str]] = {}
+    for reasons, trial in zip(drop_log, walking, strict=True):
         for reason in reasons:
-            counts[reason] = counts.get(reason, 0) + 1
-    return "; ".join(f"{reason} ({n})" for reason, n in counts.items()) or "none"
+            files.setdefault(reason, []).append(trial.recording.name)
+    parts = []
+    for reason, names in files.items():
+        more = ", ..." if len(names) > shown else ""
+        parts.append(f"{reason} ({len(names)}: {', '.join(names[:shown])}{more})")
+    return "; ".join(parts) or "none"
