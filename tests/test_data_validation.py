@@ -58,6 +58,12 @@ CASES = [
         r".*did you mean 'fz_3'",
     ),
     (
+        "wrong-case column",  # not accepted, but hinted as a case slip (not as 'fz3')
+        lambda d: replace(d / TRIAL, "fz4", "Fz4"),
+        r"trial_0002\.csv: missing required column\(s\) 'fz4' in the header \(line 1\) "
+        r"\('Fz4' differs from 'fz4' only in case; names are case-sensitive\)",
+    ),
+    (
         "duplicate column",
         lambda d: replace(d / TRIAL, "fz3", "fz2"),
         r"trial_0002\.csv: column 'fz2' appears twice in the header \(line 1\)",

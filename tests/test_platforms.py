@@ -71,6 +71,12 @@ def broken(tmp_path: Path, name: str, old: str, new: str) -> Path:
             "inductanse_h = ",
             r"motor\.inductanse_h: unknown key \(did you mean 'inductance_h'\?\)",
         ),
+        (
+            "inductance_h = ",
+            "Inductance_h = ",
+            r"motor\.Inductance_h: unknown key \('inductance_h' differs from 'Inductance_h' only "
+            r"in case; names are case-sensitive\)",
+        ),
         ("inductance_h = ", "# inductance_h = ", r"motor\.inductance_h: required key is missing"),
         (
             'source = "paper 001, Table 1: R"',

@@ -12,7 +12,7 @@ from __future__ import annotations
 import difflib
 import json
 import tomllib
-from collections.abc import Mapping
+from collections.abc import Iterable, Mapping
 from pathlib import Path
 from typing import Any, Literal, TypeVar
 
@@ -23,6 +23,7 @@ from anklelab.errors import ParameterError
 __all__ = [
     "SOURCE_KINDS",
     "Parameters",
+    "did_you_mean",
     "load_parameters",
     "parameters_from_mapping",
     "read_parameter_document",
@@ -68,16 +69,33 @@ class Parameters(BaseModel):
                     raise ParameterError(f"{dotted!r}: {key!r} is not a parameter section")
                 node = node[key]
             if leaf not in node:
-                raise ParameterError(f"{dotted!r}: unknown parameter{_hint(leaf, node)}")
+                raise ParameterError(f"{dotted!r}: unknown parameter{did_you_mean(leaf, node)}")
             node[leaf] = value
         changed = parameters_from_mapping(type(self), data, origin="replace()")
         changed._sources = {k: v for k, v in self._sources.items() if k not in changes}
         return changed
 
 
-def _hint(key: str, options: Mapping[str, Any] | Any) -> str:
-    close = difflib.get_close_matches(key, list(options), n=1)
-    return f" (did you mean {close[0]!r}?)" if close else ""
+def did_you_mean(key: str, options: Iterable[str]) -> str:
+    """A hint naming the option closest to ``key`` (``""`` if none is close).
+
+    Names are case-sensitive, but a case slip is the likeliest typo, so an option that differs
+    from ``key`` only in case is named first, and said to be one.
+
+    >>> did_you_mean("fz4", ["fz1", "fz3", "Fz4"])
+    " ('Fz4' differs from 'fz4' only in case; names are case-sensitive)"
+    >>> did_you_mean("fz_3", ["fz1", "fz3"])
+    " (did you mean 'fz3'?)"
+    """
+    options = list(options)
+    folded = [option.casefold() for option in options]
+    close = difflib.get_close_matches(key.casefold(), folded, n=1)
+    if not close:
+        return ""
+    match = options[folded.index(close[0])]
+    if close[0] == key.casefold():
+        return f" ({match!r} differs from {key!r} only in case; names are case-sensitive)"
+    return f" (did you mean {match!r}?)"
 
 
 def _split_sources(node: Any, prefix: str, sources: dict[str, str], origin: str) -> Any:
@@ -121,7 +139,7 @@ def _describe(error: Mapping[str, Any], model: type[BaseModel]) -> str:
         return f"{key}: required key is missing"
     if error["type"] == "extra_forbidden":
         parent = _model_at(model, loc[:-1])
-        return f"{key}: unknown key{_hint(str(loc[-1]), parent.model_fields)}"
+        return f"{key}: unknown key{did_you_mean(str(loc[-1]), parent.model_fields)}"
     return f"{key}: {error['msg']}; got {error.get('input')!r}"
 
 
