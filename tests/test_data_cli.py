@@ -1,6 +1,7 @@
 """`anklelab import` and `anklelab session info` as a user runs them."""
 
 import json
+import re
 import subprocess
 import sys
 
@@ -78,3 +79,16 @@ def test_session_info_table(session_dir):
     assert result.exit_code == 0, result.output
     for text in ("perturberator", "1000 Hz", "dorsi 100 ms", "plantar 225 ms", "truth"):
         assert text in result.output
+
+
+@pytest.mark.parametrize(("n_bench", "bench"), [(1, "1 test at 0.06 m"), (0, "0 tests")])
+def test_session_info_counts_are_pluralised(tmp_path, n_bench, bench):
+    session = random_session(n_calibration=1, n_walking=4, n_bench=n_bench, seed=3)
+    path = save_session(session, tmp_path / "session", format="dir")
+    result = runner.invoke(app, ["session", "info", str(path)])
+    assert result.exit_code == 0, result.output
+    cells = [re.split(r"\s{2,}", line.strip(), maxsplit=1) for line in result.output.splitlines()]
+    rows = dict(cell for cell in cells if len(cell) == 2)
+    assert rows["calibration"] == rows["dorsi 100 ms"] == rows["plantar 225 ms"] == "1 trial"
+    assert rows["walking"] == "4 trials: 2 perturbed, 2 unperturbed"
+    assert rows["bench"] == bench

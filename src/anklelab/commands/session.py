@@ -24,6 +24,16 @@ def _seconds(durations: dict[str, float] | None) -> str:
     )
 
 
+def _count(n: int, noun: str) -> str:
+    """``"1 trial"``, ``"2 trials"``."""
+    return f"{n} {noun}" if n == 1 else f"{n} {noun}s"
+
+
+def _bench(bench: dict[str, Any]) -> str:
+    distances = ", ".join(f"{d:g}" for d in bench["distances_m"])
+    return _count(bench["n"], "test") + (f" at {distances} m" if distances else "")
+
+
 def _table(summary: dict[str, Any]) -> Table:
     info = summary["info"]
     walking = summary["walking"]
@@ -36,24 +46,19 @@ def _table(summary: dict[str, Any]) -> Table:
         ("sample rate", f"{info['sample_rate_hz']:g} Hz"),
         ("force plate", ", ".join(f"{k} = {v}" for k, v in info["force_plate"].items())),
         ("geometry", ", ".join(f"{k} = {v}" for k, v in info["geometry"].items())),
-        ("calibration", f"{summary['calibration']['n']} trials"),
+        ("calibration", _count(summary["calibration"]["n"], "trial")),
         ("  durations", _seconds(summary["calibration"]["duration_s"])),
         (
             "walking",
-            f"{walking['n']} trials: {walking['n_perturbed']} perturbed, "
+            f"{_count(walking['n'], 'trial')}: {walking['n_perturbed']} perturbed, "
             f"{walking['n_unperturbed']} unperturbed",
         ),
         *(
-            (f"  {p['direction']} {p['delay_ms']:g} ms", f"{p['n']} trials")
+            (f"  {p['direction']} {p['delay_ms']:g} ms", _count(p["n"], "trial"))
             for p in walking["timing_points"]
         ),
         ("  durations", _seconds(walking["duration_s"])),
-        (
-            "bench",
-            f"{summary['bench']['n']} tests at "
-            + (", ".join(f"{d:g}" for d in summary["bench"]["distances_m"]) or "-")
-            + " m",
-        ),
+        ("bench", _bench(summary["bench"])),
         ("truth", ", ".join(summary["truth_keys"]) if summary["truth"] else "absent"),
         *((f"provenance.{k}", str(v)) for k, v in summary["provenance"].items()),
     ]
