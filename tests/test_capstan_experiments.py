@@ -107,6 +107,37 @@ def test_admittance_rendering_hides_the_device_inertia():
     assert m.inertia_kgm2 < 0.25  # well below the device's 0.37 kg m^2
 
 
+SHORT_RUNS = {
+    "observer_trial": lambda seed: observer_trial(
+        SETUP, "track", duration_s=2.0, settle_s=0.5, seed=seed
+    ),
+    "render": lambda seed: render(
+        SETUP,
+        VirtualEnvironment(stiffness_nm_per_rad=50.0, damping_nms_per_rad=5.0),
+        duration_s=2.0,
+        seed=seed,
+    ),
+}
+
+
+def _same_run(a, b):
+    return a.signals.keys() == b.signals.keys() and all(
+        np.array_equal(a[name], b[name], equal_nan=True) for name in a.signals
+    )
+
+
+@pytest.mark.parametrize("name", list(SHORT_RUNS))
+def test_seed_is_an_int_or_a_generator(name):
+    run = SHORT_RUNS[name]
+    by_int, metrics = run(4)
+    by_generator, generator_metrics = run(np.random.default_rng(4))
+    assert _same_run(by_int, by_generator) and repr(metrics) == repr(generator_metrics)
+    assert _same_run(by_int, run(4)[0])  # same seed, same run
+    assert not _same_run(by_int, run(5)[0])
+    shared = np.random.default_rng(4)  # a generator passed twice continues its stream
+    assert _same_run(by_int, run(shared)[0]) and not _same_run(by_int, run(shared)[0])
+
+
 def test_bad_arguments():
     with pytest.raises(ValueError, match="fault kind"):
         FaultInjection("gremlins", 0.1)

@@ -531,12 +531,14 @@ def observer_trial(
     band_hz: tuple[float, float] = (0.1, 3.0),
     track_amplitude_rad: float = math.radians(10.0),
     settle_s: float = 1.0,
-    seed: int = 0,
+    seed: int | np.random.Generator = 0,
 ) -> tuple[SimulationResult, ObserverMetrics]:
     """The user pushes with a random voluntary torque while the platform holds or tracks.
 
     ``hold``: the set-point is level. ``track``: the set-point is a smooth multisine
     (0.1-0.5 Hz, ``track_amplitude_rad`` peak). Metrics ignore the first ``settle_s``.
+    ``seed`` (int or Generator) draws the voluntary torque, the tracked multisine and the
+    current-sensor noise; the same seed gives the same run.
     """
     if task not in ("hold", "track"):
         raise ParameterError(f"task must be 'hold' or 'track'; got {task!r}")
@@ -598,12 +600,14 @@ def render(
     walking_speed_m_s: float = 1.0,
     duration_s: float = 30.0,
     torque_rms_nm: float = 2.0,
-    seed: int = 0,
+    seed: int | np.random.Generator = 0,
 ) -> tuple[SimulationResult, RenderMetrics]:
     """Render ``environment`` to a user pushing with a random voluntary torque.
 
     Without ``terrain`` the equilibrium is level (a plain virtual spring-damper); with it, the
-    equilibrium follows the slope under a user walking at ``walking_speed_m_s``.
+    equilibrium follows the slope under a user walking at ``walking_speed_m_s``. ``seed`` (int
+    or Generator) draws the voluntary torque and the current-sensor noise; the same seed gives
+    the same run.
     """
     rng = np.random.default_rng(seed)
     n = round(duration_s * setup.fs)
