@@ -68,7 +68,7 @@ def calibration_schedule(
     duration_s: float,
     max_gap_s: float,
     quiet_s: float,
-    rng: np.random.Generator,
+    seed: int | np.random.Generator,
 ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     """Onsets (s) and signs of a pseudorandom calibration trial (paper 000, section 2.2).
 
@@ -76,12 +76,13 @@ def calibration_schedule(
     ``[0, max_gap_s]``. When ``n_perturbations`` moves with such gaps do not fit between the
     leading and trailing ``quiet_s`` of a ``duration_s`` trial, all gaps are scaled down
     together (paper 000's ~40 moves, 0-2 s gaps and ~20 s trials cannot all hold at once);
-    if even gapless moves do not fit, fewer moves are made.
+    if even gapless moves do not fit, fewer moves are made. ``seed`` is an int or a
+    numpy.random.Generator (which then continues its stream).
 
     Examples
     --------
     >>> move = RampHold(0.035, 0.075, 0.1, 0.075)
-    >>> on, sg = calibration_schedule(move, 40, 20.0, 2.0, 0.5, np.random.default_rng(0))
+    >>> on, sg = calibration_schedule(move, 40, 20.0, 2.0, 0.5, seed=0)
     >>> len(on), bool(on[-1] + move.duration_s <= 19.5), set(sg.tolist()) <= {-1.0, 1.0}
     (40, True, True)
     """
@@ -89,6 +90,7 @@ def calibration_schedule(
     n = min(n_perturbations, int(room // move.duration_s))
     if n < 1:
         raise ParameterError(f"calibration: a {duration_s} s trial has no room for a perturbation")
+    rng = np.random.default_rng(seed)
     gaps = rng.uniform(0.0, max_gap_s, n)
     free = room - n * move.duration_s
     if gaps.sum() > free:

@@ -88,10 +88,18 @@ class StanceSignals:
 
 
 def sample_gait(
-    params: GaitParameters, n_trials: int, rng: np.random.Generator, *, variability: bool = True
+    params: GaitParameters,
+    n_trials: int,
+    seed: int | np.random.Generator,
+    *,
+    variability: bool = True,
 ) -> GaitTrials:
-    """Draw ``n_trials`` stances (nominal ones when ``variability`` is False)."""
+    """Draw ``n_trials`` stances (nominal ones when ``variability`` is False).
+
+    ``seed`` is an int or a numpy.random.Generator (which then continues its stream).
+    """
     g = params
+    rng = np.random.default_rng(seed)
 
     def spread(sd: float) -> NDArray[np.float64]:
         if not variability:

@@ -2,7 +2,8 @@
 electrogoniometer and the testing machine's load cell.
 
 Each function takes true values (time last), the parameter set, the :class:`Artefacts`
-switches and a random generator, and returns what the 16-bit 1 kHz DAQ records:
+switches and a ``seed`` (int or numpy.random.Generator: pass the caller's generator to
+continue its stream), and returns what the 16-bit 1 kHz DAQ records:
 
 - force channels: the wrench mapped onto the eight channels of the mounted plate, plus a
   charge-amplifier drift per channel (a random rate, sd ``drift_n_per_s``, from zero at the
@@ -35,9 +36,10 @@ def force_channels(
     wrench: NDArray[np.float64],
     params: PerturberatorParameters,
     art: Artefacts,
-    rng: np.random.Generator,
+    seed: int | np.random.Generator,
 ) -> NDArray[np.float64]:
     """Recorded force channels, shape ``(n_trials, 8, n_samples)``, N."""
+    rng = np.random.default_rng(seed)
     fp = params.force_plate
     channels = sensor_channels(wrench, fp)
     n_trials, _, n = channels.shape
@@ -69,9 +71,10 @@ def goniometer_reading(
     angle_rad: NDArray[np.float64],
     params: PerturberatorParameters,
     art: Artefacts,
-    rng: np.random.Generator,
+    seed: int | np.random.Generator,
 ) -> NDArray[np.float64]:
     """The electrogoniometer's ankle angle as recorded, rad."""
+    rng = np.random.default_rng(seed)
     g = params.goniometer
     reading = np.asarray(angle_rad, dtype=float) * (1 + g.sensitivity_error_fraction)
     if art.noise:
@@ -88,9 +91,10 @@ def load_cell_reading(
     force_n: NDArray[np.float64],
     params: PerturberatorParameters,
     art: Artefacts,
-    rng: np.random.Generator,
+    seed: int | np.random.Generator,
 ) -> NDArray[np.float64]:
     """The testing machine's load cell, N."""
+    rng = np.random.default_rng(seed)
     force = np.asarray(force_n, dtype=float)
     if art.noise:
         force = force + params.bench.load_cell_noise_n * rng.standard_normal(force.shape)
