@@ -22,8 +22,7 @@ import numpy as np
 
 from anklelab.experiments import simulate_perturberator
 from anklelab.pipelines import WalkingSettings, analyze_walking, fit_platform_filters
-from anklelab.report.figures_walking import filters_figure
-from anklelab.report.html import figure_png
+from anklelab.report import figure_png, filters_figure
 
 out = Path(sys.argv[1] if len(sys.argv) > 1 else tempfile.mkdtemp(prefix="anklelab-03-"))
 out.mkdir(parents=True, exist_ok=True)

@@ -23,7 +23,7 @@ from anklelab.experiments import (
     write_ident_directory,
 )
 from anklelab.ident import FrictionIdentifier
-from anklelab.report.figures_capstan import friction_figures
+from anklelab.report import friction_figures
 
 out = Path(sys.argv[1] if len(sys.argv) > 1 else tempfile.mkdtemp(prefix="anklelab-04-"))
 out.mkdir(parents=True, exist_ok=True)

@@ -33,7 +33,7 @@ from anklelab.experiments import (
 )
 from anklelab.ident import FrictionIdentifier
 from anklelab.platforms import load_platform
-from anklelab.report.figures_capstan import chirp_tracking_figure, observer_figure, step_figure
+from anklelab.report import chirp_tracking_figure, observer_figure, step_figure
 
 out = Path(sys.argv[1] if len(sys.argv) > 1 else tempfile.mkdtemp(prefix="anklelab-05-"))
 out.mkdir(parents=True, exist_ok=True)

@@ -24,7 +24,7 @@ import numpy as np
 
 from anklelab.control import TerrainProfile, VirtualEnvironment
 from anklelab.experiments import CapstanSetup, render
-from anklelab.report.figures_capstan import render_figure
+from anklelab.report import render_figure
 
 out = Path(sys.argv[1] if len(sys.argv) > 1 else tempfile.mkdtemp(prefix="anklelab-06-"))
 out.mkdir(parents=True, exist_ok=True)

@@ -54,6 +54,19 @@ def test_import_does_not_load_matplotlib():
     assert out.stdout.strip() == "False"
 
 
+def test_report_exports_every_figure_function_without_importing_matplotlib():
+    import anklelab.report
+    from anklelab.report import figures_capstan, figures_walking
+
+    for module in (figures_walking, figures_capstan):
+        for name in module.__all__:
+            assert name in anklelab.report.__all__
+            assert getattr(anklelab.report, name) is getattr(module, name)
+    code = "import sys, anklelab.report; print('matplotlib' in sys.modules)"
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert out.stdout.strip() == "False"
+
+
 def test_cli_startup_loads_no_implementation():
     # commands import their implementation inside the command function, so that `--help` and
     # every command's start do not pay for numba, scipy, h5py or the twins

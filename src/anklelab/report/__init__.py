@@ -1,8 +1,26 @@
-"""Figures and the self-contained HTML report."""
+"""Figures and the self-contained HTML report.
+
+Importing this package does not import matplotlib: each figure function imports it (Agg
+backend) when it draws.
+"""
 
 from anklelab.report.comparisons import Comparison
 from anklelab.report.demo import write_demo_report
-from anklelab.report.figures_walking import save_walking_figures, walking_figures
+from anklelab.report.figures_capstan import (
+    chirp_tracking_figure,
+    friction_figures,
+    observer_figure,
+    render_figure,
+    step_figure,
+)
+from anklelab.report.figures_walking import (
+    filters_figure,
+    model_fit_figure,
+    save_walking_figures,
+    stance_figure,
+    stiffness_figure,
+    walking_figures,
+)
 from anklelab.report.html import Figure, Section, Table, figure_png, render_html, write_report
 from anklelab.report.paper_values import PAPER_000, PAPER_001, PaperValue
 from anklelab.report.sections import results_report
@@ -15,10 +33,19 @@ __all__ = [
     "PaperValue",
     "Section",
     "Table",
+    "chirp_tracking_figure",
     "figure_png",
+    "filters_figure",
+    "friction_figures",
+    "model_fit_figure",
+    "observer_figure",
+    "render_figure",
     "render_html",
     "results_report",
     "save_walking_figures",
+    "stance_figure",
+    "step_figure",
+    "stiffness_figure",
     "walking_figures",
     "write_demo_report",
     "write_report",
