@@ -124,7 +124,9 @@ def analyze(
         )
         step(len(STEPS), total)
         out.mkdir(parents=True, exist_ok=True)
-        document = results.to_dict(session=session_hash(session_path))
+        document = results.to_dict(
+            session=Path(session_path).name, session_sha256=session_hash(session_path)
+        )
         write_text_atomic(out / "results.json", json.dumps(document, indent=2))
         write_csv(out / "results.csv", results.table())
         write_csv(out / "trials.csv", trials_table(session, results))

@@ -191,7 +191,7 @@ def run_perturberator(
         progress=lambda name: step(names.index(name), len(names)),
     )
     step(len(names), len(names))
-    document = results.to_dict(session=session_hash(path))
+    document = results.to_dict(session=path.name, session_sha256=session_hash(path))
     _write_json(directory / "results.json", document)
     return PerturberatorDemo(directory, session, bode, results, document)
 

@@ -295,8 +295,16 @@ class WalkingResults:
             )
         return rows
 
-    def to_dict(self, session: str) -> dict[str, Any]:
-        """The ``results.json`` document (DESIGN.md section 5), ``session`` naming the input."""
+    def to_dict(self, session: str, session_sha256: str | None = None) -> dict[str, Any]:
+        """The ``results.json`` document (DESIGN.md section 5).
+
+        Parameters
+        ----------
+        session : str
+            Name of the analysed input (its file or directory name).
+        session_sha256 : str, optional
+            SHA-256 of the input (:func:`anklelab.data.session_hash`), recorded when given.
+        """
         scored = self.filter_vaf.size > 0
         by_channel = self.filter_vaf_by_channel.mean(axis=0) if scored else []
         linear = self.settings.stiffness_model == "linear"
@@ -304,6 +312,7 @@ class WalkingResults:
             {
                 "anklelab_version": __version__,
                 "session": session,
+                **({"session_sha256": session_sha256} if session_sha256 else {}),
                 "settings": self.settings.model_dump(mode="json"),
                 "platform_filters": {
                     "n_lags": int(self.filters.n_lags),

@@ -251,7 +251,8 @@ def walking_section(
         for key in ("cutoff_hz", "window_ms", "bootstrap_reps", "bootstrap_fraction", "seed")
     }
     text = (
-        f"Session {document.get('session', '?')}, analysed by anklelab "
+        f"Session {document.get('session', '?')} (SHA-256 {document.get('session_sha256', '?')}), "
+        f"analysed by anklelab "
         f"{document.get('anklelab_version', '?')}: low-pass {s['cutoff_hz']} Hz, window "
         f"{s['window_ms']} ms, bootstrap {s['bootstrap_reps']} × {s['bootstrap_fraction']} of the "
         f"perturbed trials (seed {s['seed']}). k: stiffness, b: damping, I: inertia, "
