@@ -10,13 +10,15 @@ goniometer and a quantised motor angle; an arbitrary plate geometry and mounting
 from __future__ import annotations
 
 import json
+import re
+import warnings
 
 import numpy as np
 import pytest
 from scipy.signal import lfilter
 
 from anklelab.data import BenchTest, Recording, Session, SessionInfo, WalkingTrial
-from anklelab.errors import ParameterError, SessionFormatError
+from anklelab.errors import AnklelabWarning, ParameterError, SessionFormatError
 from anklelab.forceplate import CHANNELS, PlateGeometry, channels_from_load
 from anklelab.pipelines import WalkingSettings, analyze_walking
 from anklelab.signals import lowpass, vaf
@@ -358,6 +360,104 @@ def test_bad_trials_are_dropped_with_reasons():
     assert points["dorsi/200"].n_perturbed == 3 and points["dorsi/200"].n_unperturbed == 11
 
 
+def _relabelled(session, delays, select=lambda trial: True):
+    """The session with ``delay_ms`` mapped through ``delays`` for the selected perturbed trials
+    (the recordings, and so the true onsets, unchanged)."""
+    return _with_walking(
+        session,
+        [
+            WalkingTrial(w.trial, w.recording, w.perturbed, w.direction, delays[w.delay_ms])
+            if w.perturbed and select(w)
+            else w
+            for w in session.walking
+        ],
+    )
+
+
+@pytest.fixture(scope="module")
+def early_late():
+    return MiniSession(
+        GEOMETRIES["+x"], n_per_point=6, n_unperturbed=12, delays=(100.0, 475.0), seed=3
+    )
+
+
+SWAP = {100.0: 475.0, 475.0: 100.0}
+
+
+def test_swapped_delay_labels_are_dropped_and_the_condition_named(early_late):
+    """Dorsiflexion trials at 100 and 475 ms filed under each other's delay_ms: every one is
+    dropped with its detected and manifest times, each emptied condition is named with the
+    timing point its onsets fit, and the plantarflexion conditions are untouched."""
+    session = _relabelled(early_late.session, SWAP, lambda w: w.direction == "dorsi")
+    with pytest.warns(AnklelabWarning) as caught:
+        result = analyze_walking(session, WalkingSettings(bootstrap_reps=10))
+    messages = [str(w.message) for w in caught]
+    assert len(messages) == 2 and list(result.warnings) == messages
+    assert re.fullmatch(
+        r"walking/trials\.csv: dorsi/100: all 6 perturbed trials were dropped, 6 of them because "
+        r"the onset detected in the motor angle \(median 4[67]\d ms after heel contact\) differs "
+        r"from the manifest's delay_ms = 100 by more than onset_tolerance_ms = 50 ms; they fit "
+        r"dorsi/475: are the delay_ms labels swapped\?",
+        messages[0],
+    )
+    assert "dorsi/475: all 6" in messages[1] and "they fit dorsi/100" in messages[1]
+    assert [tp.key for tp in result.timing_points] == ["plantar/100", "plantar/475"]
+    for trial, reasons in zip(session.walking, result.stance.drop_log, strict=True):
+        if trial.direction != "dorsi":
+            assert reasons == ()
+            continue
+        true = early_late.true_onset_ms[f"dorsi/{SWAP[trial.delay_ms]:g}"]
+        (reason,) = reasons
+        match = re.fullmatch(
+            r"onset differs from the manifest's delay_ms by more than 50 ms \[trial (\d+): "
+            r"detected ([\d.]+) ms after heel contact, manifest delay_ms (\d+)\]",
+            reason,
+        )
+        assert match, reason
+        assert int(match[1]) == trial.trial and float(match[3]) == trial.delay_ms
+        assert min(abs(float(match[2]) - t) for t in true) < 1.5  # the detected onset
+    assert result.drop_counts() == {
+        "onset differs from the manifest's delay_ms by more than 50 ms": 12
+    }
+    assert json.loads(json.dumps(result.to_dict(session="s")))["warnings"] == messages
+
+
+def test_one_mislabelled_trial_is_dropped_without_a_warning(early_late):
+    first = next(w for w in early_late.session.walking if w.direction == "plantar")
+    session = _relabelled(early_late.session, SWAP, lambda w: w is first)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", AnklelabWarning)
+        result = analyze_walking(session, WalkingSettings(bootstrap_reps=10))
+    assert sum(bool(r) for r in result.stance.drop_log) == 1
+    points = {tp.key: tp.n_perturbed for tp in result.timing_points}
+    assert points[f"plantar/{first.delay_ms:g}"] == 5  # the trial's true timing point
+    assert points[f"plantar/{SWAP[first.delay_ms]:g}"] == 6  # its label: the others only
+    assert not result.warnings
+
+
+def test_onset_tolerance_is_a_setting(early_late):
+    """A tolerance wider than the labels' difference lets the swapped trials through, filed
+    under the manifest's labels: nothing but the onset check catches a mislabelled trial."""
+    session = _relabelled(early_late.session, SWAP, lambda w: w.direction == "dorsi")
+    result = analyze_walking(session, WalkingSettings(bootstrap_reps=10, onset_tolerance_ms=400))
+    assert not any(result.stance.drop_log)
+    dorsi100 = next(tp for tp in result.timing_points if tp.key == "dorsi/100")
+    assert np.mean(dorsi100.onset_ms) > 450
+    with pytest.raises(ValueError, match="onset_tolerance_ms"):
+        WalkingSettings(onset_tolerance_ms=0)
+
+
+def test_every_label_swapped_is_a_clear_error_naming_the_conditions(early_late):
+    session = _relabelled(early_late.session, SWAP)
+    with pytest.raises(
+        SessionFormatError,
+        match=r"no usable perturbed trials.*dorsi/100: all 6 perturbed trials were dropped.*"
+        r"labels swapped\?.*plantar/475: all 6.*drop reasons: onset differs from the manifest's "
+        r"delay_ms by more than 50 ms \(24: ",
+    ):
+        analyze_walking(session)
+
+
 def test_no_unperturbed_trials_is_a_clear_error():
     mini = MiniSession(GEOMETRIES["+x"], n_per_point=3, n_unperturbed=0, delays=(200.0,), seed=4)
     with pytest.raises(SessionFormatError, match="no usable unperturbed trials"):
@@ -492,6 +592,30 @@ def test_cli_identify_then_analyze_writes_results_table_and_figures(tmp_path):
         assert (out / f"{name}.png").read_bytes()[:4] == b"\x89PNG"
 
 
+def test_cli_counts_mislabelled_trials_and_prints_the_warning(early_late, tmp_path):
+    from typer.testing import CliRunner
+
+    from anklelab.cli import app
+    from anklelab.data import save_session
+
+    session = _relabelled(early_late.session, SWAP, lambda w: w.direction == "dorsi")
+    path = save_session(session, tmp_path / "s.h5")
+    out = tmp_path / "out"
+    args = ["analyze", str(path), "--out", str(out), "--seed", "1", "--no-figures"]
+    result = CliRunner().invoke(app, args)
+    assert result.exit_code == 0, result.output
+    text = " ".join(result.output.split())  # rich wraps long lines
+    n = len(session.walking)
+    assert (
+        f"12 of {n} walking trials dropped (12 onset differs from the manifest's delay_ms by "
+        "more than 50 ms)" in text
+    )
+    assert "warning: walking/trials.csv: dorsi/100: all 6 perturbed trials were dropped" in text
+    assert "UserWarning" not in text and "AnklelabWarning" not in text
+    doc = json.loads((out / "results.json").read_text())
+    assert len(doc["warnings"]) == 2
+
+
 def test_cli_bad_settings_file_names_the_key(tmp_path):
     import subprocess
     import sys
@@ -558,6 +682,7 @@ def test_twin_small_noisy_session_dorsiflexion_stiffness():
     standard errors of the sampling noise (se from the bootstrap spread, see ``_se``)."""
     session = _twin(trials_per_point=40, n_unperturbed=60, bench=False, seed=11)
     result, rows = _twin_errors(session)
+    assert not any(result.stance.drop_log)  # onsets within onset_tolerance_ms of delay_ms
     assert np.mean(result.filter_vaf) >= 95.0
     dorsi = [row for row in rows if row[0].direction == "dorsi"]
     assert len(dorsi) == 4
@@ -587,6 +712,7 @@ def test_twin_human_ankle_linear_stiffness_model():
     assert session.bench == ()  # no prosthetic bench tests with a human foot
     _, constant = _twin_errors(session)
     result, rows = _twin_errors(session, WalkingSettings(stiffness_model="linear"))
+    assert not any(result.stance.drop_log)
     assert result.validation() == []
     assert len(rows) == 6
     for (tp, truth, error), (_, _, error_constant) in zip(rows, constant, strict=True):
@@ -606,6 +732,7 @@ def test_twin_default_session_meets_the_contract(seed):
     and pooled held-out platform-filter VAF >= 95 %."""
     session = _twin(seed=seed, bench=False)
     result, rows = _twin_errors(session)
+    assert not any(result.stance.drop_log) and not result.warnings
     assert np.mean(result.filter_vaf) >= 95.0
     for tp, truth, error in rows:
         if tp.direction == "dorsi":

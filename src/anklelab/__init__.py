@@ -12,6 +12,7 @@ DESIGN.md section 2 (``platforms``, ``sim``, ``control``, ``data``, ``signals``,
 from anklelab._version import __version__
 from anklelab.errors import (
     AnklelabError,
+    AnklelabWarning,
     EventNotFoundError,
     NotFittedError,
     ParameterError,
@@ -32,6 +33,7 @@ from anklelab.platforms import load_platform
 __all__ = [
     "CHANNELS",
     "AnklelabError",
+    "AnklelabWarning",
     "EventNotFoundError",
     "NotFittedError",
     "ParameterError",

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 __all__ = [
     "AnklelabError",
+    "AnklelabWarning",
     "EventNotFoundError",
     "NotFittedError",
     "ParameterError",
@@ -15,6 +16,11 @@ __all__ = [
 
 class AnklelabError(Exception):
     """Base class of every anklelab exception."""
+
+
+class AnklelabWarning(UserWarning):
+    """Something in the data deserves attention, but the analysis could go on (e.g. a manifest
+    condition whose trials were all dropped)."""
 
 
 class ParameterError(AnklelabError, ValueError):

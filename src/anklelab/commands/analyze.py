@@ -5,6 +5,7 @@ from __future__ import annotations
 import csv
 import io
 import json
+import warnings
 from collections.abc import Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Annotated, Any
@@ -109,6 +110,7 @@ def analyze(
     direction), OUT/trials.csv (detections and drop reasons per trial) and OUT/*.png figures.
     """
     from anklelab.data import load_session, session_hash
+    from anklelab.errors import AnklelabWarning
     from anklelab.ident.irf import PlatformFilters
     from anklelab.pipelines.walking import STEPS, analyze_walking, load_walking_settings
 
@@ -119,9 +121,14 @@ def analyze(
         step = task("analysing")
         total = len(STEPS) + 1 + figures
         names = list(STEPS)
-        results = analyze_walking(
-            session, settings, filters=filters, progress=lambda name: step(names.index(name), total)
-        )
+        with warnings.catch_warnings():  # its warnings are printed below, with the summary
+            warnings.simplefilter("ignore", AnklelabWarning)
+            results = analyze_walking(
+                session,
+                settings,
+                filters=filters,
+                progress=lambda name: step(names.index(name), total),
+            )
         step(len(STEPS), total)
         out.mkdir(parents=True, exist_ok=True)
         document = results.to_dict(
@@ -137,10 +144,14 @@ def analyze(
         step(total, total)
     console = Console()
     console.print(_summary(results))
-    dropped = sum(1 for reasons in results.stance.drop_log if reasons)
+    counts = results.drop_counts()
+    reasons = "; ".join(f"{n} {kind}" for kind, n in counts.items())
     vaf = document["platform_filters"]["vaf_percent_mean"]
     console.print(
         f"platform filters: held-out VAF {'-' if vaf is None else f'{vaf:.2f}'} %; "
-        f"{dropped} of {len(session.walking)} walking trials dropped (see trials.csv); "
-        f"results in {out}"
+        f"{sum(counts.values())} of {len(session.walking)} walking trials dropped"
+        f"{f' ({reasons})' if reasons else ''} (see trials.csv); results in {out}",
+        markup=False,
     )
+    for message in results.warnings:
+        console.print(f"warning: {message}", style="yellow", markup=False)

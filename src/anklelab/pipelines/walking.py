@@ -27,6 +27,7 @@ trial manifest); no number of the digital twin is assumed.
 
 from __future__ import annotations
 
+import warnings
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -39,7 +40,7 @@ from pydantic import Field, model_validator
 from anklelab._params import Parameters, load_parameters
 from anklelab._version import __version__
 from anklelab.data.session import Recording, Session, WalkingTrial
-from anklelab.errors import ParameterError, SessionFormatError
+from anklelab.errors import AnklelabWarning, ParameterError, SessionFormatError
 from anklelab.forceplate import (
     CHANNELS,
     PlateGeometry,
@@ -87,6 +88,7 @@ _KIN = [0, 1, 2]
 _ANGLE, _TORQUE, _DX = 0, 3, 4
 _DIRECTIONS = ("dorsi", "plantar")
 _MIN_FZ_N = 1.0  # below this vertical force the COP is undefined (forceplate.resultants' default)
+_MISMATCH = "onset differs from the manifest's delay_ms"
 
 
 class WalkingSettings(Parameters):
@@ -107,6 +109,13 @@ class WalkingSettings(Parameters):
         Unloaded span at the start of each walking file used to zero channels and motor angle.
     onset_min_amplitude_rad
         Smallest motor-angle excursion that counts as a perturbation.
+    onset_tolerance_ms
+        A perturbed trial whose detected onset (after the detected heel contact) differs from
+        its manifest ``delay_ms`` by more than this is dropped as mislabelled. The onset jitters
+        by 3-5 ms sd around the intended delay (paper 000); on default twin sessions (seeds
+        0-2, 1200 perturbed trials) onset minus delay_ms is -0.4 ± 4.2 ms, at most 15.9 ms
+        away. 50 ms is three times that, and less than half the 125 ms between paper 000's
+        timing points, so a trial filed under a neighbouring timing point is caught.
     filter_inputs, n_lags, angle_lags, filter_method, calibration_fit_trial
         Platform filters: input pathways, length of the velocity/acceleration filters and of
         the angle filter (samples; 1 = a static gain, see
@@ -152,6 +161,7 @@ class WalkingSettings(Parameters):
     contact_cop_ms: float = Field(20.0, gt=0)
     baseline_ms: float = Field(50.0, gt=0)
     onset_min_amplitude_rad: float = Field(0.005, gt=0)
+    onset_tolerance_ms: float = Field(50.0, gt=0)
     filter_inputs: tuple[Literal["angle", "velocity", "acceleration"], ...] = Field(
         ("angle", "acceleration"), min_length=1
     )
@@ -265,6 +275,9 @@ class WalkingResults:
         Kept walking trials aligned at heel contact (:data:`STANCE_CHANNELS`), with metadata
         ``condition``, ``trial``, ``heel_contact_s``, ``onset_s`` (detected, NaN if unperturbed),
         ``onset_ms`` (after heel contact) and a drop log naming why each other trial was dropped.
+    warnings : tuple of str
+        Conditions of the manifest that lost every trial because the detected onsets disagree
+        with their ``delay_ms`` (each also issued as an :class:`~anklelab.errors.AnklelabWarning`).
     """
 
     settings: WalkingSettings
@@ -274,6 +287,12 @@ class WalkingResults:
     timing_points: list[TimingPoint]
     bench: list[BenchStiffness]
     stance: Trials
+    warnings: tuple[str, ...] = ()
+
+    def drop_counts(self) -> dict[str, int]:
+        """Number of dropped walking trials per kind of reason (per-trial details left out)."""
+        kinds = [_reason_kind(reasons[0]) for reasons in self.stance.drop_log if reasons]
+        return {kind: kinds.count(kind) for kind in dict.fromkeys(kinds)}
 
     def validation(self) -> list[dict[str, float]]:
         """Dorsiflexion estimates against the bench stiffness interpolated at ``cop_m``."""
@@ -347,6 +366,7 @@ class WalkingResults:
                 ],
                 "bench": [row._asdict() for row in self.bench],
                 "validation": self.validation(),
+                **({"warnings": list(self.warnings)} if self.warnings else {}),
             }
         )
 
@@ -483,17 +503,84 @@ def _condition(trial: WalkingTrial) -> str:
     return f"{trial.direction}/{trial.delay_ms:g}" if trial.perturbed else "none"
 
 
-def _first_reasons(checks: list[tuple[NDArray[np.bool_], str]], n: int) -> list[tuple[str, ...]]:
-    """Per trial, the first failing check's reason (later checks assume the earlier passed)."""
+def _first_reasons(
+    checks: Sequence[tuple[NDArray[np.bool_], str | Sequence[str]]], n: int
+) -> list[tuple[str, ...]]:
+    """Per trial, the first failing check's reason (later checks assume the earlier passed).
+
+    A check's reason is one text for every trial, or one per trial.
+    """
     log: list[tuple[str, ...]] = [()] * n
     for mask, reason in checks:
         for i in np.flatnonzero(mask):
-            log[i] = log[i] or (reason,)
+            log[i] = log[i] or (reason if isinstance(reason, str) else reason[i],)
     return log
 
 
-def _stance_trials(session: Session, settings: WalkingSettings, filters: PlatformFilters) -> Trials:
-    """Walking trials to heel-contact-aligned stance trials, every drop logged with its reason."""
+def _reason_kind(reason: str) -> str:
+    """A drop reason without its per-trial details (the part in square brackets at its end)."""
+    return reason.split(" [", 1)[0]
+
+
+def _mismatch_reasons(
+    walking: Sequence[WalkingTrial], onset_ms: NDArray[np.float64], tolerance_ms: float
+) -> list[str]:
+    """Per trial, the drop reason for an onset that disagrees with the manifest's delay_ms."""
+    return [
+        f"{_MISMATCH} by more than {tolerance_ms:g} ms [trial {w.trial}: detected "
+        f"{t:.1f} ms after heel contact, manifest delay_ms {w.delay_ms:g}]"
+        for w, t in zip(walking, onset_ms, strict=True)
+    ]
+
+
+def _mislabelled_conditions(
+    walking: Sequence[WalkingTrial],
+    log: Sequence[tuple[str, ...]],
+    onset_ms: NDArray[np.float64],
+    tolerance_ms: float,
+) -> list[str]:
+    """A message for each manifest condition that lost every trial, some to the onset check.
+
+    Says how many trials the check dropped, where their onsets were (median), and which of the
+    manifest's timing points of the same direction that median is nearest to.
+    """
+    condition = np.array([_condition(w) for w in walking])
+    delay = np.array([w.delay_ms for w in walking], dtype=float)
+    mismatch = np.array([bool(r) and _reason_kind(r[0]).startswith(_MISMATCH) for r in log])
+    kept = np.array([not r for r in log])
+    messages = []
+    for key in dict.fromkeys(condition[mismatch]):
+        members = condition == key
+        if kept[members].any():
+            continue
+        direction, labelled = key.split("/")[0], delay[members][0]
+        timing = np.unique(delay[np.char.startswith(condition, f"{direction}/")])
+        timing = timing[timing != labelled]
+        median = float(np.median(onset_ms[members & mismatch]))
+        nearest = timing[np.argmin(np.abs(timing - median))] if timing.size else np.inf
+        hint = (
+            f"they fit {direction}/{nearest:g}: are the delay_ms labels swapped?"
+            if abs(nearest - median) <= tolerance_ms
+            else "are the delay_ms labels wrong?"
+        )
+        messages.append(
+            f"walking/trials.csv: {key}: all {members.sum()} perturbed trials were dropped, "
+            f"{(members & mismatch).sum()} of them because the onset detected in the motor angle "
+            f"(median {median:.0f} ms after heel contact) differs from the manifest's "
+            f"delay_ms = {labelled:g} by more than onset_tolerance_ms = "
+            f"{tolerance_ms:g} ms; {hint}"
+        )
+    return messages
+
+
+def _stance_trials(
+    session: Session, settings: WalkingSettings, filters: PlatformFilters
+) -> tuple[Trials, list[str]]:
+    """Walking trials to heel-contact-aligned stance trials, every drop logged with its reason.
+
+    Also returns a message for each manifest condition whose trials were all dropped, some
+    because their detected onsets disagree with the manifest's ``delay_ms``.
+    """
     info, walking = session.info, session.walking
     fs = info.sample_rate_hz
     if not walking:
@@ -553,6 +640,8 @@ def _stance_trials(session: Session, settings: WalkingSettings, filters: Platfor
     sign = np.array([{"dorsi": 1.0, "plantar": -1.0}.get(w.direction, 0.0) for w in walking])
     onset = np.where(found, onsets.index, event)
     offset = np.round(onset).astype(np.int64) - event
+    onset_ms = (onset - event) / fs * 1000.0
+    tolerance = settings.onset_tolerance_ms
     log = _first_reasons(
         [
             *too_short,
@@ -567,10 +656,15 @@ def _stance_trials(session: Session, settings: WalkingSettings, filters: Platfor
                 "motor moved against the manifest direction",
             ),
             (perturbed & (onset < event), "perturbation began before heel contact"),
+            (
+                perturbed & (np.abs(onset_ms - delay) > tolerance),
+                _mismatch_reasons(walking, onset_ms, tolerance),
+            ),
             (~perturbed & found, "motor angle moved in an unperturbed trial"),
         ],
         len(walking),
     )
+    mislabelled = _mislabelled_conditions(walking, log, onset_ms, tolerance)
     usable = perturbed & np.array([not r for r in log])
     span = int(np.max(offset[usable], initial=0)) + _samples(max(settings.windows_ms()), fs)
     data = np.concatenate(
@@ -583,7 +677,7 @@ def _stance_trials(session: Session, settings: WalkingSettings, filters: Platfor
         "delay_ms": delay,
         "heel_contact_s": time0 + event / fs,
         "onset_s": np.where(perturbed & found, time0 + onset / fs, np.nan),
-        "onset_ms": np.where(perturbed & found, (onset - event) / fs * 1000.0, np.nan),
+        "onset_ms": np.where(perturbed & found, onset_ms, np.nan),
         "offset": offset,
     }
     stance = epoch(
@@ -597,10 +691,11 @@ def _stance_trials(session: Session, settings: WalkingSettings, filters: Platfor
         lengths=lengths,
         drop_log=log,
     )
-    return stance.drop(
+    stance = stance.drop(
         ~np.isfinite(stance.data).all(axis=(1, 2)),
         "vertical force below 1 N within the analysed stance (COP undefined)",
     )
+    return stance, mislabelled
 
 
 def _sagittal_matrix(plate: PlateGeometry) -> NDArray[np.float64]:
@@ -754,9 +849,11 @@ def analyze_walking(
         _check_calibration_lengths(filters, session.calibration, fs)
         filter_vaf, filter_vaf_by_channel = _score_filters(filters, session.calibration)
     report(STEPS[1])
-    stance = _stance_trials(session, settings, filters)
+    stance, mislabelled = _stance_trials(session, settings, filters)
     unperturbed = stance["none"]
-    drops = f"drop reasons: {_drop_summary(stance.drop_log, session.walking)}"
+    drops = "; ".join(
+        [*mislabelled, f"drop reasons: {_drop_summary(stance.drop_log, session.walking)}"]
+    )
     if len(unperturbed) == 0:
         raise SessionFormatError(
             "walking/trials.csv: no usable unperturbed trials, so the walking profile cannot be "
@@ -767,6 +864,8 @@ def analyze_walking(
             f"walking/trials.csv: no usable perturbed trials, so no impedance can be estimated; "
             f"{drops}"
         )
+    for message in mislabelled:
+        warnings.warn(message, AnklelabWarning, stacklevel=2)
     report(STEPS[2])
     rng = np.random.default_rng(settings.seed)
     nominal = unperturbed.average()
@@ -783,17 +882,18 @@ def analyze_walking(
         timing_points=points,
         bench=bench_stiffness(session.bench),
         stance=stance,
+        warnings=tuple(mislabelled),
     )
 
 
 def _drop_summary(
     drop_log: Sequence[tuple[str, ...]], walking: Sequence[WalkingTrial], shown: int = 3
 ) -> str:
-    """Each drop reason with its count and the first ``shown`` files it applies to."""
+    """Each kind of drop reason with its count and the first ``shown`` files it applies to."""
     files: dict[str, list[str]] = {}
     for reasons, trial in zip(drop_log, walking, strict=True):
         for reason in reasons:
-            files.setdefault(reason, []).append(trial.recording.name)
+            files.setdefault(_reason_kind(reason), []).append(trial.recording.name)
     parts = []
     for reason, names in files.items():
         more = ", ..." if len(names) > shown else ""
