@@ -81,7 +81,7 @@ def per_trial_loop(session, settings):
     nominal = sum(none) / len(none)
     rng = np.random.default_rng(settings.seed)
     lengths = [round(w * fs / 1000.0) for w in settings.windows_ms()]
-    ref = round(settings.offset_reference_ms * fs / 1000.0)
+    ref = round(settings.offset_reference() * fs / 1000.0)
     keys = sorted(
         {(t.direction, t.delay_ms) for t in session.walking if t.perturbed},
         key=lambda k: (("dorsi", "plantar").index(k[0]), k[1]),

@@ -251,6 +251,29 @@ def test_linear_stiffness_model_recovers_constant_impedance_and_reports_the_slop
     assert "stiffness_slope_nm_per_rad_per_s_sd" in result.table()[0]
 
 
+@pytest.mark.parametrize(
+    ("cutoff_hz", "reference_ms"), [(40.0, 40.0), (10.0, 160.0)], ids=["40Hz", "10Hz"]
+)
+def test_offset_reference_follows_the_low_pass(mini, cutoff_hz, reference_ms):
+    """At another cut-off the offsets are read the same number of the filter's time constants
+    before the onset, and K and I stay accurate: each condition as in the 20 Hz test, and
+    their mean error within three standard errors of it (no allowance: no systematic error).
+    Read 80 ms early at 10 Hz (1.9 time constants) they are not: k +0.7 to +1.1 %, I +4.6 to
+    +5.5 % at every condition, and the mean-error check fails."""
+    settings = WalkingSettings(bootstrap_reps=60, cutoff_hz=cutoff_hz)
+    assert settings.offset_reference_ms is None
+    assert settings.offset_reference() == pytest.approx(reference_ms)
+    result = analyze_walking(mini.session, settings)
+    doc = json.loads(json.dumps(result.to_dict(session="abc")))
+    assert doc["settings"]["offset_reference_ms"] == pytest.approx(reference_ms)
+    for name, true in (("stiffness", K), ("inertia", INERTIA)):
+        values = [getattr(tp, name) for tp in result.timing_points]
+        errors = np.array([np.mean(v) - true for v in values])
+        se = np.array([_se(v) for v in values])
+        assert np.all(np.abs(errors) < 4 * se + 0.01 * true), (name, errors / true)
+        assert abs(errors.mean()) < 3 * np.sqrt(np.sum(se**2)) / se.size, (name, errors / true)
+
+
 def test_platform_filters_and_drop_log(analysed):
     assert analysed.filter_vaf.shape == (2,) and np.all(analysed.filter_vaf > 95.0)
     assert analysed.filter_vaf_by_channel.shape == (2, 8)
@@ -300,6 +323,7 @@ def test_results_document_has_exactly_the_contract_keys(analysed):
         "error_percent",
     }
     assert doc["settings"]["cutoff_hz"] == 20.0 and doc["settings"]["window_ms"] == 100.0
+    assert doc["settings"]["offset_reference_ms"] == 80.0  # resolved from the low-pass
 
 
 def test_validation_error_is_against_the_bench_line_at_cop(analysed):
