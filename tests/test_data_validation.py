@@ -102,8 +102,17 @@ CASES = [
     (
         "wrong sample rate",
         lambda d: set_times(d / TRIAL, np.arange(N) / 500.0),
-        r"trial_0002\.csv: column 'time_s': median time step 0\.002 s \(500 Hz\) does not match "
-        r"session\.toml sample_rate_hz = 1000",
+        r"trial_0002\.csv: column 'time_s', line 3: time step 0\.002 s from the previous row; "
+        r"expected 0\.001 s ± 2% \(session\.toml sample_rate_hz = 1000\); the median time step "
+        r"0\.002 s \(500 Hz\) does not match it either",
+    ),
+    (
+        "sample rate changes after ten samples",  # the row named is where the steps go wrong
+        lambda d: set_times(
+            d / TRIAL, np.r_[np.arange(10) / 1e3, 0.009 + np.arange(1, N - 9) / 500]
+        ),
+        r"trial_0002\.csv: column 'time_s', line 12: time step 0\.002 s from the previous row; "
+        r"expected 0\.001 s",
     ),
     (
         "dropped sample",
@@ -113,7 +122,7 @@ CASES = [
     (
         "time in milliseconds",
         lambda d: set_times(d / TRIAL, np.arange(N) * 1.0),
-        r"trial_0002\.csv: column 'time_s': median time step 1 s .*is time in ms\?",
+        r"trial_0002\.csv: column 'time_s', line 3: time step 1 s .*is time in ms\?",
     ),
     (
         "semicolons",

@@ -198,7 +198,8 @@ def copy_of(src, dst):
         (
             "session.toml",
             lambda s: s.replace("sample_rate_hz = 1000.0", "sample_rate_hz = 500.0"),
-            r"cw_15\.csv: column 'time_s': median time step .* does not match",
+            r"cw_15\.csv: column 'time_s', line 3: time step 0\.001 s .*expected 0\.002 s.*"
+            r"median time step .* does not match",
         ),
         (
             "spindown/cw_15.csv",

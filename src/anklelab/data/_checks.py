@@ -216,6 +216,9 @@ def check_recording(
 ) -> None:
     """Check one recording: required columns finite, time strictly increasing at ``fs``.
 
+    The median time step must be within :data:`RATE_TOLERANCE` of ``1 / fs`` (else the message
+    names the first row whose step is not), and every step within :data:`MAX_STEP_JITTER`.
+
     Parameters
     ----------
     file : str
@@ -263,10 +266,12 @@ def check_recording(
             if (abs(median / 1000 - period) <= RATE_TOLERANCE * period)
             else ""
         )
+        i = int(np.argmax(np.abs(step - period) > RATE_TOLERANCE * period)) + 1
         raise SessionFormatError(
-            f"{file}: column 'time_s': median time step {median:.6g} s ({1 / median:.6g} Hz) "
-            f"does not match session.toml sample_rate_hz = {fs:g} (step {period:.6g} s, "
-            f"tolerance {RATE_TOLERANCE:.0%}){unit_hint}"
+            f"{file}: column 'time_s', {row(i)}: time step {step[i - 1]:.6g} s from the "
+            f"previous row; expected {period:.6g} s ± {RATE_TOLERANCE:.0%} (session.toml "
+            f"sample_rate_hz = {fs:g}); the median time step {median:.6g} s "
+            f"({1 / median:.6g} Hz) does not match it either{unit_hint}"
         )
     jitter = np.abs(step - period)
     if (jitter > MAX_STEP_JITTER * period).any():
