@@ -38,7 +38,12 @@ from anklelab.control.servo import (
     prbs,
     second_order_response,
 )
-from anklelab.control.trigger import onset_updates, trigger_updates
+from anklelab.control.trigger import (
+    onset_updates,
+    reading_limits,
+    screen_readings,
+    trigger_updates,
+)
 
 __all__ = [
     "CascadeGains",
@@ -69,7 +74,9 @@ __all__ = [
     "phase_crossing_hz",
     "position_control_update",
     "prbs",
+    "reading_limits",
     "safety_update",
+    "screen_readings",
     "second_order_response",
     "trigger_updates",
 ]

@@ -16,13 +16,14 @@ from anklelab.experiments.capstan_ident import (
     simulate_ident,
     write_ident_directory,
 )
-from anklelab.experiments.perturberator import simulate_perturberator
+from anklelab.experiments.perturberator import TrialFault, simulate_perturberator
 
 __all__ = [
     "CapstanSetup",
     "FaultInjection",
     "IdentData",
     "IdentProtocol",
+    "TrialFault",
     "chirp_tracking",
     "observer_trial",
     "read_ident_directory",

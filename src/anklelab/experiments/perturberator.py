@@ -8,6 +8,11 @@ the prosthetic foot, the testing-machine bench tests of the prosthesis, and reco
 :mod:`anklelab.sim.drivetrain` (platform and servo), :mod:`anklelab.sim.foot` (how the foot's
 torque reaches the plate), :mod:`anklelab.sim.gait` and :mod:`anklelab.sim.forceplate_dynamics`.
 
+Safety, as in the lab: a drive fault in any trial stops the protocol with
+:class:`~anklelab.errors.SafetyLimitError` naming the trial; bad force data at the trigger
+(:mod:`anklelab.control.trigger`) refuses that trial's perturbation, and the trial is recorded
+unperturbed with a ``note`` in its manifest row. :class:`TrialFault` injects either.
+
 Ground truth (``Session.truth``, SI units):
 
 - ``parameters``: every parameter used (``model_dump`` of the parameter set); ``foot``: kind
@@ -26,8 +31,8 @@ Ground truth (``Session.truth``, SI units):
   trial-averaged perturbation torque and angle over the window (shows how far the fit itself
   departs from the weighted reference when stiffness changes within the window).
 - ``trials``: per walking trial in session order, ``heel_contact_s`` (vertical GRF crossing
-  25 N) and ``onset_s`` (first step of the perturbation's motion plan; NaN if unperturbed),
-  both in the trial file's time.
+  25 N) and ``onset_s`` (first step of the perturbation's motion plan; NaN if unperturbed or
+  refused), both in the trial file's time.
 - ``bench``: ``distances_m`` and ``stiffness_nm_per_rad`` (the law at those distances).
 - ``time_courses`` (unless ``time_courses=False``): ``(n_trials, n_samples)`` arrays on the
   trial files' time base: ``ankle_torque_nm`` (true external ankle moment about the ankle
@@ -48,7 +53,13 @@ from numpy.typing import NDArray
 from anklelab._version import __version__
 from anklelab.control.motion_plan import StepDirectionPlan
 from anklelab.control.perturbation import RampHold, calibration_schedule
-from anklelab.control.trigger import onset_updates, trigger_updates
+from anklelab.control.safety import Fault
+from anklelab.control.trigger import (
+    onset_updates,
+    reading_limits,
+    screen_readings,
+    trigger_updates,
+)
 from anklelab.data.session import (
     BenchTest,
     Recording,
@@ -56,12 +67,18 @@ from anklelab.data.session import (
     SessionInfo,
     WalkingTrial,
 )
-from anklelab.errors import SafetyLimitError
+from anklelab.errors import ParameterError, SafetyLimitError
 from anklelab.forceplate import CHANNELS, PlateGeometry
 from anklelab.platforms import load_platform
 from anklelab.platforms.perturberator import PerturberatorParameters
 from anklelab.sim.artefacts import Artefacts
-from anklelab.sim.drivetrain import DriveFault, FootLoad, PlatformRun, simulate_platform
+from anklelab.sim.drivetrain import (
+    DriveFault,
+    EncoderFault,
+    FootLoad,
+    PlatformRun,
+    simulate_platform,
+)
 from anklelab.sim.foot import FootModel, NominalStance, bench_law, foot_load, foot_model
 from anklelab.sim.gait import (
     GaitTrials,
@@ -77,11 +94,72 @@ from anklelab.sim.sensors import (
     motor_angle_output,
 )
 
-__all__ = ["simulate_perturberator"]
+__all__ = ["TrialFault", "simulate_perturberator"]
 
 Progress = Callable[[int, int], None]
 BATCH = 50
 MARGIN = 5  # samples either side of the window for derivatives
+_ENCODER_FAULTS = {
+    "encoder-nan": EncoderFault.NAN,
+    "encoder-stale": EncoderFault.STALE,
+    "encoder-jump": EncoderFault.JUMP,
+}
+_FORCE_FAULTS = ("force-nan", "force-saturated", "force-dropped")
+_DIRECTIONS = ("none", "dorsi", "plantar")  # indexed by the sign (+1 dorsi, -1 plantar) mod 3
+
+
+@dataclass(frozen=True)
+class TrialFault:
+    """A sensor fault injected into one walking trial (fault-injection tests and drills).
+
+    Attributes
+    ----------
+    kind : str
+        The drive's motor encoder: ``encoder-nan`` (reading lost), ``encoder-stale`` (no new
+        frame) or ``encoder-jump`` (reads ``value`` rad off); the drive trips and the protocol
+        stops with :class:`anklelab.errors.SafetyLimitError`. The microcontroller's reading of
+        the vertical force: ``force-nan``, ``force-saturated`` (stuck at ``value`` N) or
+        ``force-dropped`` (no new sample: the reading freezes); the trigger refuses the trial,
+        which then runs unperturbed with a ``note`` in its manifest row.
+    trial : int
+        Walking trial number (1-based, session order).
+    time_s : float
+        Onset in the trial file's time, s.
+    value : float
+        Size of an ``encoder-jump`` (rad) or the ``force-saturated`` reading (N).
+    """
+
+    kind: str
+    trial: int
+    time_s: float
+    value: float = 0.0
+
+    def __post_init__(self) -> None:
+        kinds = (*_ENCODER_FAULTS, *_FORCE_FAULTS)
+        if self.kind not in kinds:
+            raise ParameterError(f"fault kind must be one of {list(kinds)}; got {self.kind!r}")
+        if self.kind in ("encoder-jump", "force-saturated") and self.value == 0.0:
+            raise ParameterError(f"fault {self.kind}: give its size as value (got 0)")
+
+    def corrupt(
+        self,
+        reading: NDArray[np.float64],
+        counter: NDArray[np.float64],
+        time_s: NDArray[np.float64],
+    ) -> None:
+        """Apply a force fault, in place, to one trial's readings and sample counter at
+        ``time_s``."""
+        hit = np.flatnonzero(time_s >= self.time_s)
+        if self.kind not in _FORCE_FAULTS or hit.size == 0:
+            return
+        if self.kind == "force-nan":
+            reading[hit] = np.nan
+        elif self.kind == "force-saturated":
+            reading[hit] = self.value
+        else:
+            k = hit[0]
+            reading[hit] = reading[k - 1] if k else reading[0]
+            counter[hit] = counter[k] - 1
 
 
 @dataclass(frozen=True)
@@ -114,6 +192,7 @@ def simulate_perturberator(
     substeps: int = 1,
     time_courses: bool = True,
     progress: Progress | None = None,
+    fault: TrialFault | None = None,
 ) -> Session:
     """Simulate a whole Perturberator session (calibration, walking, bench) with ground truth.
 
@@ -144,6 +223,8 @@ def simulate_perturberator(
         Store per-trial true time courses in the truth tree.
     progress : callable, optional
         Called as ``progress(done, total)`` with trial counts as the simulation advances.
+    fault : TrialFault, optional
+        A sensor fault to inject into one walking trial.
 
     Returns
     -------
@@ -168,7 +249,10 @@ def simulate_perturberator(
     unperturbed = walk.n_unperturbed if n_unperturbed is None else n_unperturbed
     n_cal = params.calibration.n_trials if n_calibration is None else n_calibration
     n_bench = len(params.bench.distances_m) * params.bench.tests_per_distance if bench else 0
-    total = n_cal + per_point * len(walk.timing_points_ms) + unperturbed + n_bench
+    n_walking = per_point * len(walk.timing_points_ms) + unperturbed
+    if fault is not None and not 1 <= fault.trial <= n_walking:
+        raise ParameterError(f"fault.trial: expected 1 ... {n_walking}, got {fault.trial}")
+    total = n_cal + n_walking + n_bench
     done = [0]
 
     def advance(n: int) -> None:
@@ -178,7 +262,7 @@ def simulate_perturberator(
 
     calibration = _calibration(setup, n_cal, rng_cal, advance)
     walking, walk_truth = _walking(
-        setup, model, per_point, unperturbed, rng_walk, advance, time_courses
+        setup, model, per_point, unperturbed, rng_walk, advance, time_courses, fault
     )
     tests, bench_truth = _bench(setup, rng_bench, advance) if bench else ((), None)
     geo = params.geometry
@@ -280,26 +364,49 @@ def _onsets(
     delays: NDArray[np.float64],
     signs: NDArray[np.float64],
     rng: np.random.Generator,
-) -> NDArray[np.float64]:
-    """Start of each perturbation's motion plan (s; NaN if unperturbed): the microcontroller's
-    threshold on the vertical force at its update instants, then its delay counter."""
+    fault: TrialFault | None,
+) -> tuple[NDArray[np.float64], NDArray[np.int64], NDArray[np.float64]]:
+    """The microcontroller's trigger on its reading of the vertical force at its update instants:
+    the safety monitor screens each reading, the first above the threshold starts the delay
+    counter, the count's end starts the perturbation. A monitor fault up to that update refuses
+    the trial.
+
+    Returns the onsets (s; NaN if unperturbed or refused), the monitor's
+    :class:`~anklelab.control.safety.Fault` code of refused trials (0 otherwise) and when it
+    latched (s; NaN if it did not).
+    """
     p, plan = setup.params, setup.plan
     threshold = p.walking.heel_contact_threshold_n
     rate = plan.update_rate_hz
-    first = np.floor(trials.contact_s * rate).astype(np.int64)  # the loading phase suffices
-    window = first[:, None] + np.arange(int(np.ceil(trials.loading_s.max() * rate)) + 2)
-    force = vertical_force(trials, p.gait, window / rate)
-    offset = np.zeros(len(trials))
-    counter = np.zeros(len(trials))
+    n_trials = len(trials)
+    offset = np.zeros(n_trials)
+    counter = np.zeros(n_trials)
     if setup.art.onset_jitter:
         limit = threshold - 5.0
-        offset = np.clip(
-            p.trigger.input_offset_sd_n * rng.standard_normal(len(trials)), -limit, limit
-        )
-        counter = p.trigger.counter_error_sd_fraction * rng.standard_normal(len(trials))
-    trigger = first + trigger_updates(force, threshold, offset)
-    start = onset_updates(trigger, np.nan_to_num(delays) / 1000.0, rate, counter)
-    return np.where(signs != 0, start / rate, np.nan)
+        offset = np.clip(p.trigger.input_offset_sd_n * rng.standard_normal(n_trials), -limit, limit)
+        counter = p.trigger.counter_error_sd_fraction * rng.standard_normal(n_trials)
+    delay_s = np.nan_to_num(delays) / 1000.0
+    # from the update before heel contact through the loading phase and the longest delay
+    first = np.floor(trials.contact_s * rate).astype(np.int64)
+    width = int(np.ceil(trials.loading_s.max() * rate)) + 3
+    width += int(np.ceil(np.max(delay_s * (1 + counter)) * rate))
+    window = first[:, None] + np.arange(width)
+    reading = vertical_force(trials, p.gait, window / rate) + offset[:, None]
+    samples = np.tile(np.arange(width, dtype=float), (n_trials, 1))
+    if fault is not None:
+        row = fault.trial - 1
+        fault.corrupt(reading[row], samples[row], window[row] / rate)
+    limits = reading_limits(p.trigger.force_limit_n, p.trigger.max_dropped_updates)
+    code, at = screen_readings(reading, samples, limits)
+    # from the update the monitor latches on, the reading is never compared
+    compared = np.where(np.arange(width) < at[:, None], reading, -np.inf)
+    rows = np.flatnonzero((compared >= threshold).any(axis=1) | (code == 0))
+    trigger = np.full(n_trials, width, dtype=np.int64)
+    trigger[rows] = trigger_updates(compared[rows], threshold, np.zeros(rows.size))
+    start = onset_updates(first + trigger, delay_s, rate, counter)
+    refused = (code != 0) & (first + at <= start)
+    onset = np.where((signs != 0) & ~refused, start / rate, np.nan)
+    return onset, np.where(refused, code, 0), np.where(refused, (first + at) / rate, np.nan)
 
 
 @dataclass(frozen=True)
@@ -321,6 +428,7 @@ def _run_walking(
     onset: NDArray[np.float64],
     signs: NDArray[np.float64],
     advance: Callable[[int], None],
+    fault: TrialFault | None,
 ) -> _WalkingRun:
     """Simulate the trials in batches; re-run each perturbed one from just before its onset
     without the perturbation, so that the difference is the exact perturbation."""
@@ -339,9 +447,14 @@ def _run_walking(
         sub = FootLoad(load.channels[b], load.fs, load.scalars[b])
         first = np.ceil(np.nan_to_num(onset[b]) * setup.fs - 1e-9).astype(np.int64)
         fork = np.where(signs[b] != 0, (first - 2 * MARGIN) * per_sample, -1)
+        lost = np.full(b.stop - b.start, np.nan)
+        if fault is not None and fault.kind in _ENCODER_FAULTS and b.start < fault.trial <= b.stop:
+            lost[fault.trial - 1 - b.start] = fault.time_s
         run = simulate_platform(
             p, setup.reference(planned, n), load=sub, artefacts=setup.art,
-            substeps=setup.substeps, fork=fork,
+            substeps=setup.substeps, fork=fork, encoder_fault_s=lost,
+            encoder_fault=_ENCODER_FAULTS.get(fault.kind if fault else "", EncoderFault.NAN),
+            encoder_jump_rad=fault.value if fault else 0.0,
         )  # fmt: skip
         _check_faults(run, "walking", start)
         assert run.wrench is not None and run.snapshot is not None
@@ -373,6 +486,7 @@ def _walking(
     rng: np.random.Generator,
     advance: Callable[[int], None],
     time_courses: bool,
+    fault: TrialFault | None,
 ) -> tuple[tuple[WalkingTrial, ...], dict[str, Any]]:
     """Walking trials with heel-contact-triggered perturbations (paper 000, section 2.4)."""
     p, art = setup.params, setup.art
@@ -383,14 +497,18 @@ def _walking(
     n = round(gait.trial_duration_s * setup.fs)
     time = np.arange(n) / setup.fs
     heel_contact = heel_contact_times(trials, gait, walk.heel_contact_threshold_n)
-    onset = _onsets(setup, trials, delays, signs, rng)
+    onset, refused, refused_s = _onsets(setup, trials, delays, signs, rng, fault)
+    notes = [
+        _refusal_note(int(refused[i]), refused_s[i], signs[i], delays[i]) for i in range(n_trials)
+    ]
+    delays = np.where(refused != 0, np.nan, delays)
+    signs = np.where(refused != 0, 0.0, signs)
     load, nominal = foot_load(foot, trials, stance_signals(trials, gait, time), heel_contact, time)
-    run = _run_walking(setup, load, onset, signs, advance)
+    run = _run_walking(setup, load, onset, signs, advance, fault)
     channels = force_channels(run.wrench, p, art, rng)
     true_angle = nominal.angle_rad + run.angle
     recorded_motor = motor_angle_output(run.motor, p, art)
     recorded_angle = goniometer_reading(true_angle, p, art, rng)
-    names = ("none", "dorsi", "plantar")
     walking = tuple(
         WalkingTrial(
             trial=i + 1,
@@ -400,8 +518,9 @@ def _walking(
                 | dict(zip(CHANNELS, channels[i], strict=True)),
             ),
             perturbed=bool(signs[i] != 0),
-            direction=names[int(signs[i]) % 3],  # type: ignore[arg-type]
+            direction=_DIRECTIONS[int(signs[i]) % 3],  # type: ignore[arg-type]
             delay_ms=float(delays[i]),
+            extra=notes[i],
         )
         for i in range(n_trials)
     )
@@ -417,6 +536,18 @@ def _walking(
             "stiffness_nm_per_rad": nominal.stiffness_nm_per_rad,
         }
     return walking, truth
+
+
+def _refusal_note(fault: int, time_s: float, sign: float, delay_ms: float) -> dict[str, str]:
+    """Manifest note of a trial whose trigger refused bad force data (empty if it did not)."""
+    if not fault:
+        return {}
+    intended = _DIRECTIONS[int(sign) % 3]
+    intended += "" if np.isnan(delay_ms) else f" {delay_ms:g} ms"
+    return {
+        "note": f"trigger refused ({Fault(fault).name} in the force reading at {time_s:.4f} s); "
+        f"intended: {intended}"
+    }
 
 
 def _reference(

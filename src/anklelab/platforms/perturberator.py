@@ -53,12 +53,14 @@ def _increasing(owner: str, name: str, values: tuple[float, ...]) -> None:
 
 
 class MotorParameters(Parameters):
-    """Brushless servo motor (Kollmorgen AKM42H class) and its drive's current limit."""
+    """Servo motor (Kollmorgen AKM42H class): drive current limit, windings, holding brake."""
 
     rotor_inertia_kgm2: float = Positive
     gearhead_input_inertia_kgm2: float = NonNegative
     torque_constant_nm_per_a: float = Positive
     peak_current_a: float = Positive
+    winding_resistance_ohm: float = Positive
+    brake_engage_s: float = NonNegative
 
 
 class TransmissionParameters(Parameters):
@@ -101,6 +103,7 @@ class ServoParameters(Parameters):
     current_bandwidth_hz: float = Positive
     velocity_limit_rad_per_s: float = Positive
     following_error_limit_rad: float = Positive
+    encoder_timeout_samples: int = Field(ge=0)
 
 
 class MotionPlanParameters(Parameters):
@@ -180,6 +183,8 @@ class TriggerParameters(Parameters):
 
     input_offset_sd_n: float = NonNegative
     counter_error_sd_fraction: float = Fraction
+    force_limit_n: float = Positive
+    max_dropped_updates: int = Field(ge=1)
 
 
 class BenchProtocol(Parameters):

@@ -2,7 +2,14 @@
 
 from anklelab.sim.artefacts import Artefacts
 from anklelab.sim.capstan import CapstanTwin, SimulationResult, linear_platform
-from anklelab.sim.drivetrain import DriveFault, FootLoad, PlatformRun, simulate_platform
+from anklelab.sim.drivetrain import (
+    DriveFault,
+    EncoderFault,
+    FootLoad,
+    PlatformRun,
+    simulate_platform,
+    stopping_distance,
+)
 from anklelab.sim.foot import FootModel, NominalStance, bench_law, foot_load, foot_model
 from anklelab.sim.gait import (
     GaitTrials,
@@ -17,6 +24,7 @@ __all__ = [
     "Artefacts",
     "CapstanTwin",
     "DriveFault",
+    "EncoderFault",
     "FootLoad",
     "FootModel",
     "GaitTrials",
@@ -32,5 +40,6 @@ __all__ = [
     "sample_gait",
     "simulate_platform",
     "stance_signals",
+    "stopping_distance",
     "vertical_force",
 ]

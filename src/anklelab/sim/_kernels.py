@@ -26,10 +26,12 @@ from numba import njit
 # platform constants (pc)
 J_M, K_S, C_S, B_M, T_COUL, W_EPS, J_H, B_H, K_G, TAU_MAX, INV_TC = range(11)
 KPP, KVP, WI, ENC_Q, AZ0, X_H, H_H, M_T, I_T, X_T, Z_T, GRAV, DT = range(11, 24)
-POS_MAX, VEL_MAX, FOLLOW_MAX = range(24, 27)
-N_PC = 27
+POS_MAX, VEL_MAX, FOLLOW_MAX, ENC_TIMEOUT, B_DB, BRAKE_STEPS = range(24, 30)
+N_PC = 30
 # drive faults (anklelab.sim.drivetrain.DriveFault)
-D_ENCODER, D_POSITION, D_VELOCITY, D_FOLLOWING = 1, 2, 3, 4
+D_ENCODER, D_POSITION, D_VELOCITY, D_FOLLOWING, D_STALE = 1, 2, 3, 4, 5
+# injected encoder faults (anklelab.sim.drivetrain.EncoderFault)
+E_NAN, E_STALE, E_JUMP = 1, 2, 3
 # per-trial foot scalars (fp)
 F_IF, F_XA, F_DZ, F_MIS, F_KLEG, F_KSH, F_BSH = range(7)
 N_FP = 7
@@ -160,7 +162,7 @@ def _plate_wrench(s, d, ta, lx, lz, gv, pc, fp, inertia, c, sn, w):
 @njit(cache=True)
 def run_batch(
     pc, fp, g, gait_fs, ref, inj, flags, sos_v, sos_h, sos_aa, plate_every, rec_every,
-    span, resume, fork, enc_fault, mech, wrench, loop, snap, fault,
+    span, resume, fork, enc_fault, enc_jump, mech, wrench, loop, snap, fault,
 ):  # fmt: skip
     """Simulate each trial of a batch; fills ``mech``, ``wrench`` and ``loop`` in place.
 
@@ -179,13 +181,18 @@ def run_batch(
     span : (n_trials, 2) first and end velocity step simulated.
     resume : (n_trials, N_SNAP) state at the first step (used with ``flags[FL_RESUME]``).
     fork : (n_trials,) step at whose start the state is copied into ``snap`` (-1: never).
-    enc_fault : (n_trials,) step from which the encoder reads NaN (-1: never), fault injection.
+    enc_fault : (n_trials, 2) fault injection: the step from which the encoder fails (-1: never)
+        and how (``E_NAN`` reads NaN, ``E_STALE`` sends no new frame, ``E_JUMP`` reads
+        ``enc_jump`` rad off).
+    enc_jump : (n_trials,) offset of an ``E_JUMP`` fault, rad.
     mech, wrench : (n_trials, N_MECH | 6, n_rec) outputs; loop : (n_trials, 3, n_ticks) or empty.
     fault : (n_trials, 2) output: the drive's latched fault code (``D_*``, 0 none) and step.
 
-    The drive disables its output (zero torque) from the step it detects a fault: a non-finite
-    encoder reading, the encoder beyond the angle limit, overspeed, or a following error above
-    its threshold.
+    Fault reaction (see :mod:`anklelab.sim.drivetrain`): after a position or following-error
+    fault the velocity loop is commanded to zero speed (controlled stop, then hold); after a
+    lost or stale encoder or overspeed the windings are shorted (dynamic brake, torque
+    ``-B_DB w_m`` within the torque limit) and the holding brake locks the motor shaft
+    ``BRAKE_STEPS`` steps later. A resumed trial starts healthy.
     """
     n_trials, n_ticks = ref.shape
     n_steps = 2 * n_ticks
@@ -219,7 +226,10 @@ def run_batch(
             s[:] = 0.0
             integ, th0, flat, vcmd, tau_next, enc_prev = 0.0, 0.0, False, 0.0, 0.0, 0.0
         code = 0
+        locked = False
+        lock_angle = held = 0.0
         j0 = span[n, 0]
+        last_frame = j0 - 1
         for j in range(j0, min(span[n, 1], n_steps)):
             t = j * dt
             if j == fork[n]:
@@ -230,26 +240,38 @@ def run_batch(
             enc = s[1]
             if pc[ENC_Q] > 0.0:
                 enc = math.floor(s[1] / pc[ENC_Q] + 0.5) * pc[ENC_Q]
-            if 0 <= enc_fault[n] <= j:
-                enc = math.nan
+            frame = j  # the encoder's frame counter
+            if 0 <= enc_fault[n, 0] <= j:
+                kind = enc_fault[n, 1]
+                if kind == E_NAN:
+                    enc = math.nan
+                elif kind == E_STALE:
+                    if j == enc_fault[n, 0]:
+                        held = enc_prev
+                    enc = held
+                    frame = enc_fault[n, 0] - 1
+                else:
+                    enc += enc_jump[n]
+            last_frame = max(last_frame, frame)
             vel = (enc - enc_prev) / dt if j > j0 else 0.0
             if code == 0:
                 if not math.isfinite(enc):
                     code = D_ENCODER
-                elif abs(enc) > pc[POS_MAX]:
-                    code = D_POSITION
+                elif j - last_frame > pc[ENC_TIMEOUT]:
+                    code = D_STALE
                 elif abs(vel) > pc[VEL_MAX]:
                     code = D_VELOCITY
+                elif abs(enc) > pc[POS_MAX]:
+                    code = D_POSITION
                 elif j % 2 == 0 and abs(ref[n, j // 2] - enc) > pc[FOLLOW_MAX]:
                     code = D_FOLLOWING
                 if code != 0:
                     fault[n, 0] = code
                     fault[n, 1] = j
-            if code != 0:  # output disabled: no torque, controller frozen
-                tau_cmd = 0.0
-                tau_next = 0.0
-            else:
-                if j % 2 == 0:
+            if code == 0 or code == D_POSITION or code == D_FOLLOWING:
+                if code != 0:  # controlled stop: zero speed, then hold
+                    vcmd = 0.0
+                elif j % 2 == 0:
                     i = j // 2
                     ctrl = pc[KPP] * (ref[n, i] - enc)
                     vcmd = ctrl + (inj[n, i] if has_inj else 0.0)
@@ -263,6 +285,11 @@ def run_batch(
                     integ += pc[WI] * err * dt
                 tau_cmd = tau_next  # one velocity-loop sample of computation delay
                 tau_next = min(max(raw, -pc[TAU_MAX]), pc[TAU_MAX])
+            else:  # dynamic brake (no feedback), then the holding brake
+                tau_cmd = min(max(-pc[B_DB] * s[2], -pc[TAU_MAX]), pc[TAU_MAX])
+                if not locked and j - fault[n, 1] >= pc[BRAKE_STEPS]:
+                    locked = True
+                    lock_angle = s[1]
             enc_prev = enc
             # plant: RK4 sub-steps with the torque command held
             for q in range(n_sub):
@@ -322,3 +349,6 @@ def run_batch(
                 _rhs(tmp, tau_cmd, gv1, pc, fp[n], shell, th0, fric, cth, sth, k4)
                 for c in range(7):
                     s[c] += h / 6.0 * (k1[c] + 2.0 * k2[c] + 2.0 * k3[c] + k4[c])
+                if locked:  # the holding brake holds the motor shaft
+                    s[1] = lock_angle
+                    s[2] = 0.0

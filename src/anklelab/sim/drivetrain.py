@@ -15,6 +15,30 @@ velocity) at the velocity-loop rate (16 kHz), whose torque command takes effect 
 sample later. The plant is integrated by RK4 with the command held, ``substeps`` steps per
 velocity-loop period (the integration step the convergence test halves); the Coulomb term and
 the hinge's tilt (sin, cos) are evaluated once per integration step.
+
+Faults and the fault reaction. Every velocity-loop sample the drive checks, in this order: the
+encoder reading is finite (else ``ENCODER``); a new encoder frame arrived within
+``encoder_timeout_samples`` samples (else ``ENCODER_STALE``); the encoder speed is within
+``velocity_limit_rad_per_s`` (else ``VELOCITY``: a runaway, or an encoder jump, which reads as
+a speed spike); the angle is within ``angle_limit_rad`` (else ``POSITION``); the position
+command minus the encoder is within ``following_error_limit_rad`` (else ``FOLLOWING_ERROR``).
+The first fault latches, and the drive stops the hinge as a Kollmorgen AKD does (AKD user
+guide, sections "Controlled Stop" and "Dynamic Braking"; AKD fault card):
+
+- feedback it can trust (``POSITION``, ``FOLLOWING_ERROR``): *controlled stop* — the position
+  loop is dropped and the velocity loop is commanded to zero speed within the torque limit
+  (the fastest deceleration the drive has, ``CS.DEC`` above it); it then holds zero speed,
+  which holds the shaft where it stopped (the integral action is a stiff position hold);
+- feedback lost or suspect (``ENCODER``, ``ENCODER_STALE``, ``VELOCITY``): *dynamic brake* —
+  the drive shorts the windings in phase with the back EMF, which needs no feedback; the
+  motor feels ``-b_db w_m`` with ``b_db = 2 Kt² N² / (3 R)`` (three-phase short of line-to-line
+  resistance ``R``, ``Kt`` per rms ampere; winding inductance neglected) within the torque
+  limit (``DRV.DBILIMIT`` at the peak current), and the spring-applied holding brake, released
+  only while the power stage is enabled (``MOTOR.BRAKEIMM = 1``, as for a load that must not
+  drop), locks the motor shaft ``brake_engage_s`` later. A dynamic brake alone holds no
+  steady load (someone standing on the plate would push it round at ``M / b_db``).
+
+:func:`stopping_distance` bounds how far the hinge travels after a trip.
 """
 
 from __future__ import annotations
@@ -34,10 +58,13 @@ from anklelab.sim.forceplate_dynamics import anti_alias_sos, mode_sos
 __all__ = [
     "GRAVITY",
     "DriveFault",
+    "EncoderFault",
     "FootLoad",
     "PlatformRun",
+    "dynamic_brake_nms_per_rad",
     "platform_constants",
     "simulate_platform",
+    "stopping_distance",
 ]
 
 GRAVITY = 9.81
@@ -51,6 +78,20 @@ class DriveFault(IntEnum):
     POSITION = K.D_POSITION  # beyond the hinge's angle limit
     VELOCITY = K.D_VELOCITY  # overspeed
     FOLLOWING_ERROR = K.D_FOLLOWING  # command minus encoder beyond its threshold
+    ENCODER_STALE = K.D_STALE  # no new encoder frame within the watchdog's timeout
+
+    @property
+    def controlled_stop(self) -> bool:
+        """Whether the drive stops under velocity control (else by the dynamic brake)."""
+        return self in (DriveFault.POSITION, DriveFault.FOLLOWING_ERROR)
+
+
+class EncoderFault(IntEnum):
+    """An injected encoder failure (fault-injection tests)."""
+
+    NAN = K.E_NAN  # the reading is lost (non-finite)
+    STALE = K.E_STALE  # no new frame arrives: the reading freezes
+    JUMP = K.E_JUMP  # the reading jumps by a fixed offset
 
 
 @dataclass(frozen=True)
@@ -102,6 +143,17 @@ class PlatformRun:
     fault_s: NDArray[np.float64] | None = None
 
 
+def dynamic_brake_nms_per_rad(params: PerturberatorParameters) -> float:
+    """Braking coefficient of the shorted windings referred to the output, N·m·s/rad.
+
+    ``2 Kt² N² / (3 R)``: each phase's back EMF ``Kt w / 3`` drives ``2 Kt w / (3 R)`` rms
+    amperes through half the line-to-line resistance ``R``, and ``Kt`` turns it into torque.
+    """
+    m = params.motor
+    n = params.transmission.ratio
+    return 2 * m.torque_constant_nm_per_a**2 * n * n / (3 * m.winding_resistance_ohm)
+
+
 def platform_constants(
     params: PerturberatorParameters, *, hinge_height_m: float, quantisation: bool = True
 ) -> NDArray[np.float64]:
@@ -142,6 +194,9 @@ def platform_constants(
     pc[K.POS_MAX] = hg.angle_limit_rad
     pc[K.VEL_MAX] = sv.velocity_limit_rad_per_s
     pc[K.FOLLOW_MAX] = sv.following_error_limit_rad
+    pc[K.ENC_TIMEOUT] = sv.encoder_timeout_samples
+    pc[K.B_DB] = dynamic_brake_nms_per_rad(params)
+    pc[K.BRAKE_STEPS] = round(m.brake_engage_s * sv.velocity_loop_rate_hz)
     return pc
 
 
@@ -160,6 +215,8 @@ def simulate_platform(
     resume: tuple[NDArray[np.int64], NDArray[np.float64]] | None = None,
     stop: NDArray[np.int64] | None = None,
     encoder_fault_s: NDArray[np.float64] | None = None,
+    encoder_fault: EncoderFault = EncoderFault.NAN,
+    encoder_jump_rad: float = 0.0,
 ) -> PlatformRun:
     """Run the servo-controlled hinge on a batch of position references.
 
@@ -193,7 +250,11 @@ def simulate_platform(
     stop : ndarray of int, shape (n_trials,), optional
         Velocity-loop step at which each trial ends (default: the end of ``reference``).
     encoder_fault_s : ndarray, shape (n_trials,), optional
-        Fault injection: from this time (s; NaN for never) the encoder reads NaN.
+        Fault injection: from this time (s; NaN for never) the encoder fails.
+    encoder_fault : EncoderFault
+        How it fails: reads NaN, freezes (no new frames) or jumps by ``encoder_jump_rad``.
+    encoder_jump_rad : float
+        Size of a jump, rad.
 
     Returns
     -------
@@ -249,10 +310,12 @@ def simulate_platform(
         span[:, 0], start_state = resume[0], np.ascontiguousarray(resume[1], dtype=float)
     forks = np.full(n_trials, -1, dtype=np.int64) if fork is None else fork.astype(np.int64)
     snap = np.zeros((n_trials, K.N_SNAP))
-    enc_fault = np.full(n_trials, -1, dtype=np.int64)
+    enc_fault = np.full((n_trials, 2), -1, dtype=np.int64)
+    enc_fault[:, 1] = EncoderFault(encoder_fault)
     if encoder_fault_s is not None:
         lost = np.isfinite(encoder_fault_s)
-        enc_fault[lost] = np.round(encoder_fault_s[lost] * sv.velocity_loop_rate_hz)
+        enc_fault[lost, 0] = np.round(encoder_fault_s[lost] * sv.velocity_loop_rate_hz)
+    enc_jump = np.full(n_trials, float(encoder_jump_rad))
     fault = np.zeros((n_trials, 2), dtype=np.int64)
     n_rec = -(-2 * n_ticks // rec_every)
     mech = np.zeros((n_trials, K.N_MECH, n_rec))
@@ -261,7 +324,8 @@ def simulate_platform(
     K.run_batch(
         pc, np.ascontiguousarray(fp, dtype=float), np.ascontiguousarray(g, dtype=float),
         float(gait_fs), ref, np.ascontiguousarray(inj), flags, sos_v, sos_h, sos_aa,
-        2, rec_every, span, start_state, forks, enc_fault, mech, wrench, loop, snap, fault,
+        2, rec_every, span, start_state, forks, enc_fault, enc_jump, mech, wrench, loop, snap,
+        fault,
     )  # fmt: skip
     return PlatformRun(
         fs=fs_rec,
@@ -278,3 +342,66 @@ def simulate_platform(
         fault=fault[:, 0],
         fault_s=np.where(fault[:, 0] > 0, fault[:, 1] / sv.velocity_loop_rate_hz, np.nan),
     )
+
+
+def stopping_distance(
+    params: PerturberatorParameters,
+    speed: float,
+    fault: DriveFault,
+    *,
+    load_nm: float = 0.0,
+    load_inertia_kgm2: float = 0.0,
+) -> float:
+    """Upper bound on how far the hinge travels past where the drive tripped, rad.
+
+    The sum of three terms, each an upper bound:
+
+    - the reaction delay (the tripping sample, one sample of computation delay, the current
+      loop's time constant and, for ``ENCODER_STALE``, the watchdog's timeout) at the trip
+      speed;
+    - the braking distance of the motor and hinge as one body ``J`` under the braking law, a
+      viscous torque ``c w`` within the torque limit ``T`` (``c`` the velocity loop's
+      proportional gain in a controlled stop, ``b_db`` under the dynamic brake):
+      ``J w / c`` below ``w* = T / c``, plus ``J (w² - w*²) / (2 T)`` above it; under the
+      dynamic brake a steady ``load_nm`` pushing the hinge along adds its creep ``M / b_db``
+      until the holding brake closes (the controlled stop's integral action already carries
+      the load);
+    - the hinge's swing on the compliant coupler, at most ``w sqrt(J_h / k_s)`` (the swing if
+      the motor stopped at once; ``J_h`` includes what stands on the plate).
+
+    Parameters
+    ----------
+    params : PerturberatorParameters
+        Platform parameters.
+    speed : float
+        Platform speed when the drive trips, rad/s.
+    fault : DriveFault
+        The fault (it selects the reaction).
+    load_nm : float
+        Steady moment on the hinge, N·m.
+    load_inertia_kgm2 : float
+        Inertia moving with the hinge (a foot flat on the plate), kg·m².
+
+    Examples
+    --------
+    >>> from anklelab.platforms import load_platform
+    >>> p = load_platform("perturberator")
+    >>> round(stopping_distance(p, 0.5, DriveFault.POSITION) * 1e3, 2)  # mrad
+    2.68
+    """
+    fault = DriveFault(fault)
+    pc = platform_constants(params, hinge_height_m=0.0)
+    w = abs(speed)
+    hinge = pc[K.J_H] + load_inertia_kgm2
+    inertia = pc[K.J_M] + hinge
+    timeout = pc[K.ENC_TIMEOUT] if fault == DriveFault.ENCODER_STALE else 0.0
+    delay = (2 + timeout) * pc[K.DT] + 1 / pc[K.INV_TC]
+    c = pc[K.KVP] if fault.controlled_stop else pc[K.B_DB]
+    knee = pc[K.TAU_MAX] / c
+    braking = inertia * min(w, knee) / c + inertia * max(w * w - knee * knee, 0.0) / (
+        2 * pc[K.TAU_MAX]
+    )
+    if not fault.controlled_stop:
+        braking += abs(load_nm) / c * params.motor.brake_engage_s
+    swing = w * np.sqrt(hinge / pc[K.K_S])
+    return float(w * delay + braking + swing)
