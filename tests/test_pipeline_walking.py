@@ -707,6 +707,8 @@ def test_twin_small_noisy_session_dorsiflexion_stiffness():
     session = _twin(trials_per_point=40, n_unperturbed=60, bench=False, seed=11)
     result, rows = _twin_errors(session)
     assert not any(result.stance.drop_log)  # onsets within onset_tolerance_ms of delay_ms
+    # the prosthetic foot's stiffness changes only through the lever arm: no slope warning
+    assert not any(tp.warnings for tp in result.timing_points)
     assert np.mean(result.filter_vaf) >= 95.0
     dorsi = [row for row in rows if row[0].direction == "dorsi"]
     assert len(dorsi) == 4
@@ -715,7 +717,20 @@ def test_twin_small_noisy_session_dorsiflexion_stiffness():
         assert abs(error) < tolerance, (tp.key, error, tolerance)
 
 
-def test_twin_human_ankle_linear_stiffness_model():
+@pytest.fixture(scope="module")
+def human_session():
+    """Human ankle at 225, 350 and 475 ms, full artefacts, ~20 trials per point and direction."""
+    from anklelab.platforms import load_platform
+
+    params = load_platform("perturberator").replace(
+        {"walking.timing_points_ms": (225.0, 350.0, 475.0)}
+    )
+    return _twin(
+        params=params, foot="human", trials_per_point=40, n_unperturbed=60, n_calibration=2, seed=11
+    )
+
+
+def test_twin_human_ankle_linear_stiffness_model(human_session):
     """Human ankle, whose stiffness rises ~1000 N·m/rad/s through mid stance, full artefacts,
     ~20 trials per point and direction: the linear stiffness model meets the contract's 3 % plus
     three standard errors (from the bootstrap spread, see ``_se``). The constant model (the
@@ -725,14 +740,7 @@ def test_twin_human_ankle_linear_stiffness_model():
     The 100 ms point is left out: the twin's stiffness is flat until 150 ms and rises after, a
     kink inside the window that neither model describes (ten default sessions, mean error
     dorsi/plantar: constant +12/+21 %, linear -9/-4 %, bootstrap sd 11 and 6 %)."""
-    from anklelab.platforms import load_platform
-
-    params = load_platform("perturberator").replace(
-        {"walking.timing_points_ms": (225.0, 350.0, 475.0)}
-    )
-    session = _twin(
-        params=params, foot="human", trials_per_point=40, n_unperturbed=60, n_calibration=2, seed=11
-    )
+    session = human_session
     assert session.bench == ()  # no prosthetic bench tests with a human foot
     _, constant = _twin_errors(session)
     result, rows = _twin_errors(session, WalkingSettings(stiffness_model="linear"))
@@ -747,6 +755,47 @@ def test_twin_human_ankle_linear_stiffness_model():
             assert np.mean(tp.stiffness_slope) > 0, tp.key
         if tp.delay_ms == 225:
             assert error_constant - error > 0.05 * k, (tp.key, error_constant, error)
+
+
+def test_twin_human_ankle_constant_model_warns_of_the_rising_stiffness(human_session):
+    """With the constant model, results.json warns where the linear model finds the stiffness
+    rising by more than 20 % within the window: at 225 ms, early in the rise (+41 % and +54 %
+    on this session; +37 % to +54 % in both directions on five such sessions, seeds 0-3 and
+    11), but not at 475 ms, where the rise ends inside the window (-15 % to +16 %, slopes
+    within 2.8 bootstrap sd). The linear model reports the slope itself and gives no warning."""
+    result = analyze_walking(human_session)
+    warned = {tp.key: tp.warnings for tp in result.timing_points}
+    for direction in ("dorsi", "plantar"):
+        (message,) = warned[f"{direction}/225"]
+        assert re.fullmatch(
+            rf"{direction}/225: the stiffness changes within the 100 ms window: the linear model "
+            r"finds \+\d+ ± \d+ N·m/rad/s, \d+% of the constant model's \d+ N·m/rad over the "
+            r"window; .*consider stiffness_model = \"linear\"",
+            message,
+        ), message
+        assert warned[f"{direction}/475"] == ()
+    doc = json.loads(json.dumps(result.to_dict(session="abc")))
+    points = {f"{p['direction']}/{p['delay_ms']:g}": p for p in doc["timing_points"]}
+    assert points["dorsi/225"]["warnings"] == list(warned["dorsi/225"])
+    assert "warnings" not in points["dorsi/475"]
+    linear = analyze_walking(human_session, WalkingSettings(stiffness_model="linear"))
+    assert not any(tp.warnings for tp in linear.timing_points)
+
+
+def test_cli_prints_the_slope_warning(human_session, tmp_path):
+    from typer.testing import CliRunner
+
+    from anklelab.cli import app
+    from anklelab.data import save_session
+
+    path = save_session(human_session, tmp_path / "human.h5")
+    args = ["analyze", str(path), "--out", str(tmp_path / "out"), "--no-figures"]
+    result = CliRunner().invoke(app, args)
+    assert result.exit_code == 0, result.output
+    text = " ".join(result.output.split())  # rich wraps long lines
+    for direction in ("dorsi", "plantar"):
+        assert f"warning: {direction}/225: the stiffness changes within the 100 ms window" in text
+    assert "warning: dorsi/475" not in text and "warning: plantar/475" not in text
 
 
 @pytest.mark.slow

@@ -153,5 +153,6 @@ def analyze(
         f"{f' ({reasons})' if reasons else ''} (see trials.csv); results in {out}",
         markup=False,
     )
-    for message in results.warnings:
+    point_warnings = [message for tp in results.timing_points for message in tp.warnings]
+    for message in (*results.warnings, *point_warnings):
         console.print(f"warning: {message}", style="yellow", markup=False)

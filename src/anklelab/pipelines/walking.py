@@ -89,6 +89,8 @@ _ANGLE, _TORQUE, _DX = 0, 3, 4
 _DIRECTIONS = ("dorsi", "plantar")
 _MIN_FZ_N = 1.0  # below this vertical force the COP is undefined (forceplate.resultants' default)
 _MISMATCH = "onset differs from the manifest's delay_ms"
+_SLOPE_WARNING_FRACTION = 0.2  # stiffness change over the window / stiffness: warn above
+_SLOPE_WARNING_SDS = 3.0  # ... if the slope also exceeds this many bootstrap sd
 _OFFSET_REFERENCE_MS, _PAPER_CUTOFF_HZ = 80.0, 20.0  # offsets read 80 ms early at 20 Hz, order 4
 
 
@@ -266,6 +268,10 @@ class TimingPoint:
         Time after the onset over the analysis window, s.
     angle, torque, model_torque : ndarray, shape (n_reps, n_window)
         Bootstrap perturbation angle (rad), measured and model torque (N·m).
+    warnings : tuple of str
+        Doubts about the estimate: with the constant stiffness model, a stiffness that the
+        linear model, fitted as a diagnostic, finds changing within the window by more than
+        20 % of the stiffness (by a slope of more than three bootstrap sd).
     """
 
     delay_ms: float
@@ -284,6 +290,7 @@ class TimingPoint:
     angle: NDArray[np.float64]
     torque: NDArray[np.float64]
     model_torque: NDArray[np.float64]
+    warnings: tuple[str, ...] = ()
 
     @property
     def key(self) -> str:
@@ -396,6 +403,7 @@ class WalkingResults:
                         if linear
                         else {}
                     )
+                    | ({"warnings": list(tp.warnings)} if tp.warnings else {})
                     for tp in self.timing_points
                 ],
                 "bench": [row._asdict() for row in self.bench],
@@ -834,6 +842,60 @@ def _timing_point(
         angle=boot[:, _ANGLE, :n],
         torque=boot[:, _TORQUE, :n],
         model_torque=impedance_torque(analysis, boot[:, _KIN, :n], fs),
+        warnings=(
+            ()
+            if settings.stiffness_model == "linear"
+            else _slope_warning(
+                key, analysis.stiffness, boot[:, _KIN, :n], boot[:, _TORQUE, :n], fs
+            )
+        ),
+    )
+
+
+def _slope_warning(
+    key: str,
+    stiffness: NDArray[np.float64],
+    kinematics: NDArray[np.float64],
+    torque: NDArray[np.float64],
+    fs: float,
+) -> tuple[str, ...]:
+    """A warning when a constant-stiffness estimate hides a stiffness that changes in its window.
+
+    The linear stiffness model (:func:`~anklelab.ident.impedance.fit_impedance`,
+    ``stiffness_model="linear"``) is fitted to the same bootstrap averages as a diagnostic. A
+    warning is returned when the change it finds over the window, ``|k₁| × window``, exceeds
+    ``_SLOPE_WARNING_FRACTION`` (20 %) of the constant model's stiffness and ``|k₁|``
+    exceeds ``_SLOPE_WARNING_SDS`` (3) bootstrap sd (a slope that noise alone could produce is
+    not reported).
+
+    Parameters
+    ----------
+    key : str
+        Condition named in the message (``"dorsi/225"``).
+    stiffness : ndarray, shape (n_reps,)
+        Bootstrap stiffness of the constant model, N·m/rad.
+    kinematics : ndarray, shape (n_reps, 3, n_window)
+        Bootstrap ``(θ, θ', θ'')`` over the analysis window, rad, rad/s, rad/s².
+    torque : ndarray, shape (n_reps, n_window)
+        Bootstrap torque over the window, N·m.
+    fs : float
+        Sample rate, Hz.
+
+    Returns
+    -------
+    tuple of str
+        The warning, or nothing.
+    """
+    slope = fit_impedance(kinematics, torque, stiffness_model="linear", fs=fs).stiffness_slope
+    mean, window_s, k = float(np.mean(slope)), torque.shape[-1] / fs, float(np.mean(stiffness))
+    change = abs(mean) * window_s
+    if change <= _SLOPE_WARNING_FRACTION * abs(k) or abs(mean) <= _SLOPE_WARNING_SDS * _sd(slope):
+        return ()
+    return (
+        f"{key}: the stiffness changes within the {window_s * 1000:g} ms window: the linear "
+        f"model finds {mean:+.0f} ± {_sd(slope):.0f} N·m/rad/s, {change / abs(k):.0%} of the "
+        f"constant model's {k:.0f} N·m/rad over the window; a constant stiffness lets damping "
+        'and inertia absorb the change and biases it: consider stiffness_model = "linear"',
     )
 
 
