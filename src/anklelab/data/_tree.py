@@ -9,7 +9,8 @@ same way in JSON, HDF5 and TOML and compared exactly:
   lists and tuples of numbers become such arrays, 0-d arrays become scalars,
 - sequences of strings (kept as a tuple of ``str``).
 
-Keys are non-empty strings; no key or text may contain a NUL character (HDF5 cannot store it).
+Keys are non-empty strings; no key or text may contain a NUL character (HDF5 cannot store
+it) or a lone surrogate (it has no UTF-8 encoding).
 
 :func:`canonical` converts a tree to this form (dates and times become ISO strings) and raises
 ``ValueError`` naming the key of anything else. JSON files keep arrays as (nested) lists and
@@ -56,17 +57,26 @@ def canonical(tree: Mapping[str, Any], path: str = "") -> dict[str, Any]:
         raise ValueError(f"{path or 'tree'}: expected a mapping, got {type(tree).__name__}")
     out = {}
     for key, value in tree.items():
-        if not isinstance(key, str) or not key or "\x00" in key:
-            raise ValueError(f"{path}{key!r}: keys must be non-empty strings without NUL")
+        if not isinstance(key, str) or not key or not _storable(key):
+            raise ValueError(f"{path}{key!r}: keys must be non-empty UTF-8 strings without NUL")
         out[key] = _value(value, f"{path}{key}")
     return out
+
+
+def _storable(text: str) -> bool:
+    """Whether HDF5, JSON and TOML files can all hold ``text`` (UTF-8, no NUL)."""
+    try:
+        text.encode("utf-8")
+    except UnicodeEncodeError:  # a lone surrogate
+        return False
+    return "\x00" not in text
 
 
 def _value(value: Any, path: str) -> Any:
     if isinstance(value, Mapping):
         return canonical(value, path + ".")
-    if isinstance(value, str) and "\x00" in value:
-        raise ValueError(f"{path}: text with a NUL character cannot be stored")
+    if isinstance(value, str) and not _storable(value):
+        raise ValueError(f"{path}: text must be UTF-8 without NUL characters to be stored")
     if value is None or isinstance(value, bool | str):
         return value
     if isinstance(value, np.bool_):
