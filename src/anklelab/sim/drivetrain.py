@@ -26,9 +26,10 @@ The first fault latches, and the drive stops the hinge as a Kollmorgen AKD does 
 guide, sections "Controlled Stop" and "Dynamic Braking"; AKD fault card):
 
 - feedback it can trust (``POSITION``, ``FOLLOWING_ERROR``): *controlled stop* — the position
-  loop is dropped and the velocity loop is commanded to zero speed within the torque limit
-  (the fastest deceleration the drive has, ``CS.DEC`` above it); it then holds zero speed,
-  which holds the shaft where it stopped (the integral action is a stiff position hold);
+  loop is dropped and the velocity loop is commanded to zero speed at once (``CS.DEC`` set
+  above what the torque limit allows), within the torque limit; it then keeps commanding zero
+  speed, which holds the shaft where it stopped (the integral action is a stiff position hold;
+  the real drive would hand over to the holding brake, which the twin need not model);
 - feedback lost or suspect (``ENCODER``, ``ENCODER_STALE``, ``VELOCITY``): *dynamic brake* —
   the drive shorts the windings in phase with the back EMF, which needs no feedback; the
   motor feels ``-b_db w_m`` with ``b_db = 2 Kt² N² / (3 R)`` (three-phase short of line-to-line
