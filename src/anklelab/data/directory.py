@@ -29,7 +29,7 @@ import json
 import math
 import re
 import tomllib
-from collections.abc import Callable, Iterable, Iterator
+from collections.abc import Callable, Iterable, Iterator, Mapping
 from functools import partial
 from pathlib import Path
 from typing import Any
@@ -437,6 +437,23 @@ def write_directory(
         write_csv_recording(path, recording)
         tick()
 
+    def write_section(
+        folder: Path,
+        manifest: str,
+        columns: tuple[str, ...],
+        entries: list[tuple[Recording, Mapping[str, str], dict[str, str]]],
+    ) -> None:
+        """Each entry's recording, then the manifest of (extra columns | fields | file)."""
+        if not entries:
+            return
+        folder.mkdir()
+        rows = []
+        for recording, extra, fields in entries:
+            write(folder / recording.name, recording)
+            rows.append(dict(extra) | fields | {"file": recording.name})
+        text = _manifest(rows, columns)
+        (folder / manifest).write_text(text, encoding="utf-8", newline="\n")
+
     with atomic_directory(target, overwrite=overwrite) as tmp:
         try:
             text = _toml.dumps(info_to_mapping(session.info))
@@ -447,40 +464,37 @@ def write_directory(
             (tmp / "calibration").mkdir()
             for recording in session.calibration:
                 write(tmp / "calibration" / recording.name, recording)
-        if session.walking:
-            folder = tmp / "walking"
-            folder.mkdir()
-            rows = []
-            for t in session.walking:
-                write(folder / t.recording.name, t.recording)
-                rows.append(
-                    dict(t.extra)
-                    | {
+        write_section(
+            tmp / "walking",
+            "trials.csv",
+            WALKING_MANIFEST_COLUMNS,
+            [
+                (
+                    t.recording,
+                    t.extra,
+                    {
                         "trial": str(t.trial),
-                        "file": t.recording.name,
                         "perturbed": "1" if t.perturbed else "0",
                         "direction": t.direction,
                         "delay_ms": _number_text(t.delay_ms),
-                    }
+                    },
                 )
-            text = _manifest(rows, WALKING_MANIFEST_COLUMNS)
-            (folder / "trials.csv").write_text(text, encoding="utf-8", newline="\n")
-        if session.bench:
-            folder = tmp / "bench"
-            folder.mkdir()
-            rows = []
-            for b in session.bench:
-                write(folder / b.recording.name, b.recording)
-                rows.append(
-                    dict(b.extra)
-                    | {
-                        "test": str(b.test),
-                        "file": b.recording.name,
-                        "distance_m": _number_text(b.distance_m),
-                    }
+                for t in session.walking
+            ],
+        )
+        write_section(
+            tmp / "bench",
+            "tests.csv",
+            BENCH_MANIFEST_COLUMNS,
+            [
+                (
+                    b.recording,
+                    b.extra,
+                    {"test": str(b.test), "distance_m": _number_text(b.distance_m)},
                 )
-            text = _manifest(rows, BENCH_MANIFEST_COLUMNS)
-            (folder / "tests.csv").write_text(text, encoding="utf-8", newline="\n")
+                for b in session.bench
+            ],
+        )
         if session.truth is not None:
             (tmp / "truth.json").write_text(to_json(session.truth), encoding="utf-8")
         if session.provenance:
