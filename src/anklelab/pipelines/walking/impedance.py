@@ -40,12 +40,13 @@ def timing_point(
     unperturbed: NDArray[np.float64],
     n_unperturbed: int,
     settings: WalkingSettings,
-    rng: np.random.Generator,
+    seed: int | np.random.Generator,
 ) -> TimingPoint:
     """Bootstrap impedance of one condition (``"dorsi/225"``) from the stance trials.
 
     ``unperturbed`` is the mean unperturbed stance trial, shape (n_channels, n_times), channels
-    as ``stance.ch_names``.
+    as ``stance.ch_names``; ``seed`` draws the bootstrap subsets (a Generator continues its
+    stream).
     """
     group = stance[key]
     fs = stance.fs
@@ -62,7 +63,9 @@ def timing_point(
     difference[:, offsets] -= difference[:, offsets, :1]
     response = Trials(difference[..., 1:], fs, RESPONSE)
     boot = response.bootstrap(
-        settings.bootstrap_reps, settings.bootstrap_fraction, random_state=rng
+        settings.bootstrap_reps,
+        settings.bootstrap_fraction,
+        random_state=np.random.default_rng(seed),
     )
     kin, torque = boot.get_data(KINEMATICS), boot.get_data("torque")
     fit = fit_impedance(
