@@ -38,8 +38,20 @@ from anklelab.signals import (
 
 __all__ = ["STANCE_CHANNELS", "drop_summary", "reason_kind", "samples", "stance_trials"]
 
-STANCE_CHANNELS = ("angle", "velocity", "acceleration", "torque", "dx", "grf_z", "motor_angle")
-"""Channels of the heel-contact-aligned stance trials (rad, rad/s, rad/s², N·m, m, N, rad)."""
+STANCE_CHANNELS = (
+    "angle",
+    "velocity",
+    "acceleration",
+    "torque",
+    "dx",
+    "grf_z",
+    "motor_angle",
+    "torque_raw",
+    "grf_z_raw",
+    "angle_raw",
+)
+"""Channels of the heel-contact-aligned stance trials (rad, rad/s, rad/s², N·m, m, N, rad; the
+``_raw`` ones unfiltered and uncorrected for the platform, N·m, N, rad)."""
 _MISMATCH = "onset differs from the manifest's delay_ms"
 
 
@@ -162,7 +174,14 @@ def stance_trials(
         lowpass(load_raw, **lp) - filters.predict(motor, combine=sagittal), 1, 0
     )
     cop_x = cop_from_moment(moment, grf_z)
-    cop0 = _cop_at_contact(load_raw[:, 1], load_raw[:, 2], event, fs, settings.contact_cop_ms)
+    cop0 = _cop_at_contact(
+        load_raw[:, 1],
+        load_raw[:, 2],
+        event,
+        settings.heel_contact_threshold_n,
+        fs,
+        settings.contact_cop_ms,
+    )
     cop_defined = np.isfinite(cop0)
     cop_x[rows, event] = np.where(cop_defined, cop0, 0.0)  # ankle_torque zeroes the COP here
     torque, dx = ankle_torque(
@@ -210,9 +229,21 @@ def stance_trials(
     mislabelled = _mislabelled_conditions(walking, log, onset_ms, tolerance)
     usable = perturbed & np.array([not r for r in log])
     span = int(np.max(offset[usable], initial=0)) + samples(max(settings.windows_ms()), fs)
-    data = np.concatenate(
-        [kin, torque[:, None], dx[:, None], grf_z[:, None], motor[:, None]], axis=1
-    )
+    grf_x_raw, grf_z_raw, moment_raw = np.moveaxis(load_raw, 1, 0)
+    lever = np.where(cop_defined, cop0, 0.0)[:, None] + info.heel_to_ankle_m
+    channels_by_name = {
+        "angle": kin[:, 0],
+        "velocity": kin[:, 1],
+        "acceleration": kin[:, 2],
+        "torque": torque,
+        "dx": dx,
+        "grf_z": grf_z,
+        "motor_angle": motor,
+        "torque_raw": moment_raw - lever * grf_z_raw + grf_x_raw * info.ankle_height_m,
+        "grf_z_raw": grf_z_raw,
+        "angle_raw": ankle_raw - ankle[rows, event][:, None],
+    }
+    data = np.stack([channels_by_name[name] for name in STANCE_CHANNELS], axis=1)
     time0 = np.array([w.recording.time_s[0] for w in walking])
     metadata = {
         "condition": np.array([condition(w) for w in walking]),
@@ -245,23 +276,34 @@ def _cop_at_contact(
     grf_z: NDArray[np.float64],
     moment: NDArray[np.float64],
     event: NDArray[np.int64],
+    threshold_n: float,
     fs: float,
     span_ms: float,
 ) -> NDArray[np.float64]:
-    """COP at heel contact: a line fitted to the raw COP over the first ``span_ms`` of contact.
+    """COP at heel contact: the raw COP's local line, at the instant the force crosses threshold.
 
-    The low-pass would smear the force's sudden rise at heel strike over the following samples
-    and move the COP at contact forward; the raw COP (``moment / grf_z``) is unbiased but noisy
-    at small loads, so the line is weighted by ``grf_z**2`` (the COP's noise falls as 1/Fz),
-    which also makes every term a product of the raw signals (no division).
+    The crossing is found to a fraction of a sample (linear interpolation of the vertical force
+    between the last sample below ``threshold_n`` and the first above). A line is fitted to the
+    raw COP (``moment / grf_z``) over the first ``span_ms`` from the crossing sample, weighted
+    by ``grf_z**2`` (the COP's noise falls as 1/Fz; every term is then a product of the raw
+    signals, no division), and evaluated at the crossing. A short span follows a COP that rolls
+    fast or curves right after heel strike; the low-pass is not used here because it would
+    smear the force's rise over the following samples. The plate's signal chain delays the
+    force and the moment alike, so the COP read at the measured crossing is the COP at the true
+    one.
     """
     n = max(2, round(span_ms * fs / 1000.0))
-    index = np.minimum(event[:, None] + np.arange(n), grf_z.shape[-1] - 1)
+    last = grf_z.shape[-1] - 1
+    index = np.minimum(event[:, None] + np.arange(n), last)
+    before = np.take_along_axis(grf_z, np.maximum(event - 1, 0)[:, None], axis=-1)[:, 0]
+    at = np.take_along_axis(grf_z, index[:, :1], axis=-1)[:, 0]
+    with np.errstate(invalid="ignore", divide="ignore"):
+        crossing = np.clip((threshold_n - at) / (at - before), -1.0, 0.0)  # samples from event
     fz = np.take_along_axis(grf_z, index, axis=-1)
     weight, weighted_cop = fz**2, fz * np.take_along_axis(moment, index, axis=-1)
-    t = np.arange(n, dtype=float)
-    s0, s1, s2 = weight.sum(-1), weight @ t, weight @ t**2
-    c0, c1 = weighted_cop.sum(-1), weighted_cop @ t
+    t = np.arange(n, dtype=float) - np.nan_to_num(crossing)[:, None]
+    s0, s1, s2 = weight.sum(-1), (weight * t).sum(-1), (weight * t**2).sum(-1)
+    c0, c1 = weighted_cop.sum(-1), (weighted_cop * t).sum(-1)
     with np.errstate(invalid="ignore", divide="ignore"):
         return (s2 * c0 - s1 * c1) / (s0 * s2 - s1**2)
 

@@ -1,0 +1,1 @@
+"""Validation of anklelab against variation: generators and accuracy studies (not shipped)."""
