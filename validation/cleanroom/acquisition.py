@@ -38,15 +38,14 @@ def acquire_forces(
     shape = (*channels.shape[:2], 1)
     offset = s * noise.force_offset_n * rng.uniform(-1, 1, shape)
     drift = s * noise.force_drift_n_per_s * rng.standard_normal(shape) * t
-    hum = (
-        s
-        * noise.hum_n
-        * rng.uniform(0, 1, shape)
-        * np.sin(2 * np.pi * noise.hum_hz * t + rng.uniform(0, 2 * np.pi, shape))
-    )
+    amplitude = s * noise.hum_n * rng.uniform(0, 1, shape)
+    phase = rng.uniform(0, 2 * np.pi, shape)
+    carrier = 2 * np.pi * noise.hum_hz * t  # sin(ωt + p) = sin ωt cos p + cos ωt sin p
+    hum = amplitude * np.cos(phase) * np.sin(carrier) + amplitude * np.sin(phase) * np.cos(carrier)
     white = s * noise.force_noise_n * rng.standard_normal(channels.shape)
     lsb = s * np.repeat([noise.fxy_lsb_n, noise.fz_lsb_n], 4)[:, None, None]
-    return _quantise(channels + offset + drift + hum + white, lsb)
+    white += channels + offset + drift + hum
+    return _quantise(white, lsb)
 
 
 def acquire_motor_angle(angle: Array, noise: NoiseConfig, rng: np.random.Generator) -> Array:
