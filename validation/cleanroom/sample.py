@@ -50,6 +50,12 @@ def main(
             help="Unperturbed trials per perturbed trial of one timing point.",
         ),
     ] = 4.0,
+    calibration_trials: Annotated[
+        int, typer.Option("--calibration-trials", min=1, help="Calibration trials of 20 s.")
+    ] = 5,
+    bench: Annotated[
+        bool, typer.Option("--bench/--no-bench", help="Testing-machine tests of prosthetic feet.")
+    ] = True,
     sample_rate: Annotated[
         float, typer.Option("--sample-rate", min=1, help="DAQ rate, Hz.")
     ] = 1000.0,
@@ -70,7 +76,9 @@ def main(
             seed,
             trials_per_point=trials_per_point,
             unperturbed_ratio=unperturbed_ratio,
+            n_calibration=calibration_trials,
             sample_rate_hz=sample_rate,
+            bench=bench,
         )
     except ValueError as exc:
         typer.echo(f"error: {exc}", err=True)
