@@ -398,11 +398,37 @@ class HumanAnkle(_Foot):
 
 @dataclass(frozen=True)
 class GaitConfig:
-    """Walking on the plate: ground reaction force, COP path and ankle angle (README.md, Gait).
+    """Walking on the plate: GRF, COP path and ankle angle (README.md, "Walking trials").
 
-    Forces are in body weights (BW), times after initial contact in s, COP in m along the
-    walking direction relative to the heel-contact COP; ``*_cv`` are trial-to-trial coefficients
-    of variation, ``*_sd`` standard deviations.
+    Forces are in body weights (BW), times in s after initial contact, COP in m along the walking
+    direction; ``*_cv`` are trial-to-trial coefficients of variation, ``*_sd`` standard
+    deviations (normal draws clipped at 3.5 sd).
+
+    Attributes
+    ----------
+    body_mass_kg, stance_s, stance_cv, force_cv : float
+        Subject mass (kg), mean stance duration (s) and their trial-to-trial variation.
+    vertical_peak_bw, vertical_harmonics : float, (float, float, float)
+        Peak vertical GRF (BW) and the shape coefficients (a2, a3, a5) of
+        ``sin πs + a2 sin 2πs + a3 sin 3πs + a5 sin 5πs``.
+    impact_bw, impact_time_s : float
+        Heel-strike impact pulse: height (BW) and time to its peak (s).
+    braking_bw, propulsion_bw, braking_fraction, ap_impact_bw : float
+        Anterior GRF lobes (BW), the stance fraction where braking ends, an anterior impact.
+    lateral_bw, free_moment_arm_m : float
+        Medial GRF (BW) and free moment per unit vertical force (m).
+    heel_rocker_speed_m_s, heel_rocker_time_s, midstance_cop_speed_m_s, cop_cv : float
+        COP speed right after contact and its decay time, mid-stance COP speed, their variation.
+    forefoot_accel_m_s2, heel_rise_fraction, foot_length_m : float
+        COP acceleration after heel rise (m/s²), its stance fraction, the cap of the COP path.
+    cop_transient_m, cop_transient_sd_m, cop_transient_time_s : float
+        Initial COP transient ``A (u/τ) exp(1 - u/τ)``: mean and sd of A (m) and τ (s).
+    lateral_cop_drift_m, foot_lateral_m, foot_lateral_sd_m : float
+        Medial COP drift over stance and the foot's lateral placement right of the plate centre.
+    ankle_hinge_offset_m, ankle_hinge_offset_sd_m : float
+        Ankle centre in front of the hinge axis: mean and trial-to-trial sd, m.
+    ankle_angle_scale, ankle_angle_cv : float
+        Scale of the human ankle-angle curve and its trial-to-trial variation.
     """
 
     body_mass_kg: float = 80.0
@@ -466,7 +492,7 @@ class GaitConfig:
 
 @dataclass(frozen=True)
 class NoiseConfig:
-    """Measurement imperfections at ``scale`` times a paper-like level (README.md, Noise).
+    """Measurement imperfections at ``scale`` times a paper-like level (README.md, "Noise and DAQ").
 
     Every amplitude below is multiplied by ``scale``; ``scale = 0`` gives exact signals (no
     noise, drift, offsets, hum or quantisation).

@@ -151,8 +151,8 @@ def _draw_prosthetic(rng: np.random.Generator, spec: _Kind) -> ProstheticFoot:
 
 
 def _draw_human(rng: np.random.Generator, mass: float) -> HumanAnkle:
-    """Walking ankle impedance of a ``mass`` kg subject: stiffness ~1–7 N·m/rad/kg rising over
-    stance, damping ~0.02–0.05 N·m·s/rad/kg (README.md, "Human ankle")."""
+    """Walking ankle impedance of a ``mass`` kg subject: stiffness from 2–4 N·m/rad/kg 100 ms
+    after heel contact, rising over stance; damping 0.02–0.05 N·m·s/rad/kg (README.md)."""
     u = rng.uniform
     return HumanAnkle(
         stiffness_100ms_nm_per_rad=mass * u(2.0, 4.0),
