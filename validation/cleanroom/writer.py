@@ -15,13 +15,13 @@ import os
 import re
 import shutil
 import tempfile
-from collections.abc import Iterable, Mapping, Sequence
+from collections.abc import Callable, Iterable, Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from anklelab.data import Recording, Session
+from anklelab.data import BenchTest, Recording, Session, WalkingTrial
 
 __all__ = ["write_session_dir"]
 
@@ -99,6 +99,24 @@ def _write_json(path: Path, data: Mapping[str, Any]) -> None:
     path.write_text(json.dumps(data, default=_json_default, indent=1) + "\n", encoding="utf-8")
 
 
+def _write_section(
+    folder: Path,
+    manifest: str,
+    entries: Sequence[WalkingTrial | BenchTest],
+    columns: tuple[str, ...],
+    row: Callable[[Any], list[object]],
+) -> None:
+    """A folder with its manifest (``columns``, then any extra ones) and one file per entry."""
+    if not entries:
+        return
+    folder.mkdir()
+    extra = sorted({key for entry in entries for key in entry.extra})
+    rows = ([*row(entry), *(entry.extra.get(key, "") for key in extra)] for entry in entries)
+    _write_csv(folder / manifest, [*columns, *extra], rows)
+    for entry in entries:
+        _write_recording(folder / entry.recording.name, entry.recording)
+
+
 def _fill(root: Path, session: Session) -> None:
     info = session.info
     plate = info.force_plate
@@ -124,46 +142,20 @@ def _fill(root: Path, session: Session) -> None:
         (root / "calibration").mkdir()
         for recording in session.calibration:
             _write_recording(root / "calibration" / recording.name, recording)
-    if session.walking:
-        folder = root / "walking"
-        folder.mkdir()
-        extra = sorted({key for trial in session.walking for key in trial.extra})
-        _write_csv(
-            folder / "trials.csv",
-            ["trial", "file", "perturbed", "direction", "delay_ms", *extra],
-            (
-                [
-                    trial.trial,
-                    trial.recording.name,
-                    int(trial.perturbed),
-                    trial.direction,
-                    trial.delay_ms,
-                    *(trial.extra.get(key, "") for key in extra),
-                ]
-                for trial in session.walking
-            ),
-        )
-        for trial in session.walking:
-            _write_recording(folder / trial.recording.name, trial.recording)
-    if session.bench:
-        folder = root / "bench"
-        folder.mkdir()
-        extra = sorted({key for test in session.bench for key in test.extra})
-        _write_csv(
-            folder / "tests.csv",
-            ["test", "file", "distance_m", *extra],
-            (
-                [
-                    test.test,
-                    test.recording.name,
-                    test.distance_m,
-                    *(test.extra.get(k, "") for k in extra),
-                ]
-                for test in session.bench
-            ),
-        )
-        for test in session.bench:
-            _write_recording(folder / test.recording.name, test.recording)
+    _write_section(
+        root / "walking",
+        "trials.csv",
+        session.walking,
+        ("trial", "file", "perturbed", "direction", "delay_ms"),
+        lambda t: [t.trial, t.recording.name, int(t.perturbed), t.direction, t.delay_ms],
+    )
+    _write_section(
+        root / "bench",
+        "tests.csv",
+        session.bench,
+        ("test", "file", "distance_m"),
+        lambda t: [t.test, t.recording.name, t.distance_m],
+    )
     if session.truth is not None:
         _write_json(root / "truth.json", session.truth)
     if session.provenance:
