@@ -25,7 +25,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from validation.cleanroom.config import TRUNCATE_SD, Config, HumanAnkle
+from validation.cleanroom.config import TRUNCATE_SD, Config, HumanAnkle, ProstheticFoot
 from validation.cleanroom.drive import Hinge
 from validation.cleanroom.foot import stiffness
 from validation.cleanroom.forces import PlateSensors, foot_load, plate_load, tilt
@@ -86,14 +86,16 @@ class WalkingSimulation:
     channels_nominal: Array | None = None
 
 
-def reference_stiffness(foot) -> float:
+def reference_stiffness(foot: ProstheticFoot | HumanAnkle) -> float:
     """A stiffness typical of the perturbation windows, N·m/rad (the iteration's pivot)."""
     if isinstance(foot, HumanAnkle):
         return foot.stiffness_100ms_nm_per_rad * (1 + foot.rise_per_150ms)
     return float(np.mean(foot.stiffness_nm_per_rad))
 
 
-def _draw_onsets(config: Config, plan: WalkingPlan, heel_contact_s: Array, rng) -> Array:
+def _draw_onsets(
+    config: Config, plan: WalkingPlan, heel_contact_s: Array, rng: np.random.Generator
+) -> Array:
     protocol = config.protocol
     sd = np.asarray(protocol.onset_jitter_sd_s)[np.maximum(plan.point, 0)]
     jitter = np.clip(rng.standard_normal(plan.n_trials), -TRUNCATE_SD, TRUNCATE_SD) * sd
@@ -104,7 +106,9 @@ def _draw_onsets(config: Config, plan: WalkingPlan, heel_contact_s: Array, rng) 
 class _Chunk:
     """The signals of one chunk of trials at the simulation rate."""
 
-    def __init__(self, config: Config, gait: Gait, steps: Steps, rows: slice, hinges) -> None:
+    def __init__(
+        self, config: Config, gait: Gait, steps: Steps, rows: slice, hinges: tuple[Hinge, Hinge]
+    ) -> None:
         foot, plate = config.foot, config.plate
         self.config, self.gait = config, gait
         self.contact = gait.in_contact
