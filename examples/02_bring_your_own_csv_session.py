@@ -120,7 +120,7 @@ results = analyze_walking(session, WalkingSettings(bootstrap_reps=30))
 for tp in results.timing_points:
     print(
         f"{tp.key:12s} n = {tp.n_perturbed:2d}  lever arm {tp.cop_m * 100:5.2f} cm  "
-        f"k = {np.mean(tp.stiffness):5.0f} N·m/rad  I = {np.mean(tp.inertia):.3f} kg·m²"
+        f"k = {tp.stiffness.mean:5.0f} N·m/rad  I = {tp.inertia.mean:.3f} kg·m²"
     )
 dropped = [reasons for reasons in results.stance.drop_log if reasons]
 print(f"{len(dropped)} of {len(session.walking)} walking trials dropped")

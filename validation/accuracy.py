@@ -130,10 +130,21 @@ def _change(tp: dict[str, Any]) -> dict[str, Any]:
 
 
 def _draw(truth: dict[str, Any]) -> dict[str, Any]:
-    """Descriptors of the drawn session (foot, noise, trials per point, mounting...)."""
-    draw = truth.get("draw") or truth.get("config") or {}
-    keep = ("foot", "noise_scale", "trials_per_point", "human_growth_per_150ms")
-    return {key: draw.get(key, "") for key in keep}
+    """Descriptors of the drawn session (foot, noise, trials per point, growth, mounting)."""
+    if "draw" in truth:  # the randomised twin
+        draw = truth["draw"]
+        axis = truth["parameters"]["force_plate"]["anterior_axis"]
+        keep = ("foot", "noise_scale", "trials_per_point", "human_growth_per_150ms")
+        return {key: draw[key] for key in keep} | {"anterior_axis": axis}
+    config = truth.get("config", {})  # the clean-room generator
+    foot = config.get("foot", {})
+    return {
+        "foot": "human" if foot.get("model") == "human" else "prosthetic",
+        "noise_scale": config.get("noise", {}).get("scale", ""),
+        "trials_per_point": config.get("protocol", {}).get("trials_per_point", ""),
+        "human_growth_per_150ms": foot.get("rise_per_150ms", 0.0) or 0.0,
+        "anterior_axis": config.get("plate", {}).get("anterior_axis", ""),
+    }
 
 
 def _task(args: tuple[str, str, int, str | None, Path | None]) -> list[dict[str, Any]]:

@@ -66,24 +66,31 @@ def trials_table(session: Session, results: WalkingResults) -> list[dict[str, An
 
 
 def _summary(results: WalkingResults) -> Table:
+    """Estimate and 95 % interval per quantity and timing point; poorly determined ones in
+    brackets only (never as a precise number)."""
+    from anklelab.pipelines.walking.results import QUANTITIES
+
     table = Table(
         box=box.SIMPLE_HEAD,
-        title="walking impedance, bootstrap mean (sd)",
-        caption="cop: lever arm, cm; k: N·m/rad; b: N·m·s/rad; I: kg·m²",
+        title="walking impedance: estimate [95 % interval]",
+        caption="cop: lever arm, cm; model: stiffness constant or changing within the window; "
+        "Δ: stiffness changes within the window; ≈: poorly determined (interval spans zero or "
+        "exceeds ±50 %)",
     )
-    for column in ("condition", "n", "cop", "k", "b", "I", "VAF %"):
+    columns = ["condition", "n", "cop", "model"] + [f"{q.symbol} ({q.unit})" for q in QUANTITIES]
+    for column in columns:
         table.add_column(column, justify="right", no_wrap=True)
     for tp in results.timing_points:
-        cells = [
-            f"{np.mean(v):{fmt}} ({np.std(v, ddof=1) if v.size > 1 else 0.0:{fmt}})"
-            for v, fmt in (
-                (tp.stiffness, ".0f"),
-                (tp.damping, ".2f"),
-                (tp.inertia, ".3f"),
+        cells = []
+        for q in QUANTITIES:
+            e = getattr(tp, q.name)
+            low, high = e.ci95
+            interval = f"[{low:{q.format}}, {high:{q.format}}]"
+            cells.append(
+                f"≈ {interval}" if e.poorly_determined else f"{e.mean:{q.format}} {interval}"
             )
-        ]
-        vaf = f"{np.mean(tp.vaf):.1f}"
-        table.add_row(tp.key, str(tp.n_perturbed), f"{tp.cop_m * 100:.2f}", *cells, vaf)
+        model = tp.stiffness_model + (" Δ" if tp.stiffness_changes else "")
+        table.add_row(tp.key, str(tp.n_perturbed), f"{tp.cop_m * 100:.2f}", model, *cells)
     return table
 
 

@@ -30,6 +30,7 @@ __all__ = ["Adjustment", "fit_adjustment", "pre_onset_features"]
 
 FEATURE_CHANNELS = ("torque_raw", "grf_z_raw", "angle_raw")
 """Raw stance channels the features are taken from."""
+_RANK_TOLERANCE = 1e-6  # feature directions weaker than this (relative) carry no information
 _PENALTIES = (1e-2, 1e-1, 1.0, 10.0, 100.0, 1e3, np.inf)  # relative to the number of trials
 
 
@@ -43,6 +44,9 @@ class Adjustment:
         Maps standardised features to each channel's predicted departure.
     scale : ndarray, shape (n_features,)
         Feature standard deviations (features are divided by them).
+    bounds : ndarray, shape (2, n_features)
+        The smallest and largest feature values of the unperturbed trials: features are clipped
+        to them, so the regression is never extrapolated.
     penalty : ndarray, shape (n_channels,)
         Chosen ridge penalty per trial, per channel (``inf``: that channel is not adjusted).
     explained : ndarray, shape (n_channels,)
@@ -52,12 +56,14 @@ class Adjustment:
 
     coef: NDArray[np.float64]
     scale: NDArray[np.float64]
+    bounds: NDArray[np.float64]
     penalty: NDArray[np.float64]
     explained: NDArray[np.float64]
 
     def predict(self, features: NDArray[np.float64]) -> NDArray[np.float64]:
         """Predicted departures, shape ``(n_trials, n_channels, n_times)``."""
-        return np.einsum("nf,cft->nct", features / self.scale, self.coef)
+        clipped = np.clip(features, self.bounds[0], self.bounds[1])
+        return np.einsum("nf,cft->nct", clipped / self.scale, self.coef)
 
 
 def pre_onset_features(
@@ -133,23 +139,22 @@ def fit_adjustment(features: NDArray[np.float64], targets: NDArray[np.float64]) 
     scale = features.std(axis=0)
     scale = np.where(scale > 0, scale, 1.0)
     u, s, vt = np.linalg.svd(features / scale, full_matrices=False)
+    keep = s > _RANK_TOLERANCE * np.sqrt(n)  # standardised features: s ~ sqrt(n) when informative
+    u, s, vt = u[:, keep], s[keep], vt[keep]
     uty = np.einsum("nk,nct->ckt", u, targets)  # (n_channels, n_directions, n_times)
     total = (targets**2).sum(axis=(0, 2))
     projected = (uty**2).sum(axis=2)  # (n_channels, n_directions)
     penalties = np.array(_PENALTIES)
-    shrink = np.where(
-        np.isfinite(penalties)[:, None],
-        s**2 / (s**2 + np.nan_to_num(penalties, posinf=0.0)[:, None] * n),
-        0.0,
-    )  # (n_penalties, n_directions)
+    finite = np.isfinite(penalties)[:, None]
+    shrink = np.where(finite, s**2 / (s**2 + np.where(finite, penalties[:, None], 1.0) * n), 0.0)
     residual = total[None, :] - (
         (2 * shrink - shrink**2) @ projected.T
     )  # (n_penalties, n_channels)
     gcv = residual / n / (1 - shrink.sum(axis=1, keepdims=True) / n) ** 2
-    best = gcv.argmin(axis=0)
+    best = np.where(total > 0, gcv.argmin(axis=0), len(penalties) - 1)  # nothing to explain
     chosen = shrink[best]  # (n_channels, n_directions)
-    inverse = np.where(s > 0, 1.0 / np.where(s > 0, s, 1.0), 0.0)
-    coef = np.einsum("fk,ck,ckt->cft", vt.T, chosen * inverse, uty)
+    coef = np.einsum("fk,ck,ckt->cft", vt.T, chosen / s, uty)
     with np.errstate(invalid="ignore", divide="ignore"):
         explained = np.clip(1.0 - gcv[best, np.arange(len(best))] * n / total, 0.0, 1.0)
-    return Adjustment(coef, scale, penalties[best], np.nan_to_num(explained))
+    bounds = np.stack([features.min(axis=0), features.max(axis=0)])
+    return Adjustment(coef, scale, bounds, penalties[best], np.nan_to_num(explained))

@@ -125,8 +125,6 @@ def _drop_unperturbed_outliers(stance: Trials, limit: float) -> Trials:
     """Drop unperturbed trials whose stance departs from the others' median beyond ``limit``
     robust sd anywhere (one such trial would shift the nominal stance of every condition)."""
     unperturbed = stance.metadata["condition"] == "none"
-    if unperturbed.sum() < 5:
-        return stance
     picks = [stance.ch_names.index(name) for name in _SCREENED]
     wild = np.zeros(len(stance), dtype=bool)
     wild[unperturbed] = outliers(stance.data[unperturbed][:, picks], limit)

@@ -37,6 +37,7 @@ RESPONSE = ("angle", "velocity", "acceleration", "torque")
 _OFFSETS = [RESPONSE.index("angle"), RESPONSE.index("torque")]
 _SCREENED = [RESPONSE.index("angle"), RESPONSE.index("torque")]
 _MAD_TO_SD = 1.4826
+_MIN_SCREENED = 8  # fewer trials give no trustworthy median absolute deviation
 
 
 @dataclass(frozen=True)
@@ -88,11 +89,15 @@ def _departures(
 def outliers(data: NDArray[np.float64], limit: float) -> NDArray[np.bool_]:
     """Trials that depart from the trials' median by more than ``limit`` robust sd anywhere.
 
+    The robust sd at each sample is 1.4826 × the median absolute deviation there, but never
+    less than its median over time (where the trials happen to agree, as right after an offset
+    is removed, a tiny spread must not turn ordinary departures into outliers).
+
     Parameters
     ----------
     data : ndarray, shape (n_trials, n_channels, n_times)
     limit : float
-        In robust standard deviations (1.4826 × the median absolute deviation at each sample).
+        In robust standard deviations.
 
     Examples
     --------
@@ -101,11 +106,13 @@ def outliers(data: NDArray[np.float64], limit: float) -> NDArray[np.bool_]:
     >>> np.flatnonzero(outliers(x, 20.0)).tolist()
     [7]
     """
+    if len(data) < _MIN_SCREENED:
+        return np.zeros(len(data), dtype=bool)
     median = np.median(data, axis=0)
     spread = _MAD_TO_SD * np.median(np.abs(data - median), axis=0)
-    floor = 1e-3 * np.maximum(spread.mean(axis=-1, keepdims=True), np.finfo(float).tiny)
-    score = np.abs(data - median) / np.maximum(spread, floor)
-    return (score > limit).any(axis=(1, 2))
+    typical = np.median(spread, axis=-1, keepdims=True)
+    scale = np.maximum(spread, np.maximum(typical, np.finfo(float).tiny))
+    return (np.abs(data - median) / scale > limit).any(axis=(1, 2))
 
 
 def condition_responses(
@@ -150,11 +157,7 @@ def condition_responses(
         response = response - adjustment.predict(features_p)
         baseline = baseline - adjustment.predict(features_u)
         explained = float(adjustment.explained[RESPONSE.index("torque")])
-    wild = (
-        outliers(response[:, _SCREENED], settings.outlier_mads)
-        if len(group) >= 5
-        else np.zeros(len(group), dtype=bool)
-    )
+    wild = outliers(response[:, _SCREENED], settings.outlier_mads)
     dropped = {
         int(position): f"its response departs from the other {key} trials' median by more than "
         f"{settings.outlier_mads:g} robust sd (a glitch?) [trial {trial}]"

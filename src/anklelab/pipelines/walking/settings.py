@@ -88,6 +88,7 @@ class WalkingSettings(Parameters):
     heel_contact_threshold_n: float = Field(25.0, gt=0)
     heel_contact_hold_ms: float = Field(5.0, ge=0)
     contact_cop_ms: float = Field(5.0, gt=0)
+    contact_cop_degree: int = Field(1, ge=0, le=5)
     baseline_ms: float = Field(50.0, gt=0)
     onset_min_amplitude_rad: float = Field(0.005, gt=0)
     onset_tolerance_ms: float = Field(50.0, gt=0)

@@ -181,6 +181,7 @@ def stance_trials(
         settings.heel_contact_threshold_n,
         fs,
         settings.contact_cop_ms,
+        settings.contact_cop_degree,
     )
     cop_defined = np.isfinite(cop0)
     cop_x[rows, event] = np.where(cop_defined, cop0, 0.0)  # ankle_torque zeroes the COP here
@@ -279,20 +280,20 @@ def _cop_at_contact(
     threshold_n: float,
     fs: float,
     span_ms: float,
+    degree: int,
 ) -> NDArray[np.float64]:
-    """COP at heel contact: the raw COP's local line, at the instant the force crosses threshold.
+    """COP at heel contact: the raw COP's local polynomial at the instant the force crosses.
 
     The crossing is found to a fraction of a sample (linear interpolation of the vertical force
-    between the last sample below ``threshold_n`` and the first above). A line is fitted to the
-    raw COP (``moment / grf_z``) over the first ``span_ms`` from the crossing sample, weighted
-    by ``grf_z**2`` (the COP's noise falls as 1/Fz; every term is then a product of the raw
-    signals, no division), and evaluated at the crossing. A short span follows a COP that rolls
-    fast or curves right after heel strike; the low-pass is not used here because it would
-    smear the force's rise over the following samples. The plate's signal chain delays the
-    force and the moment alike, so the COP read at the measured crossing is the COP at the true
-    one.
+    between the last sample below ``threshold_n`` and the first above). A polynomial of
+    ``degree`` in time is fitted to the raw COP (``moment / grf_z``) over the first ``span_ms``
+    from the crossing sample, weighted by ``grf_z**2``, and evaluated at the crossing. The
+    weight follows the COP's error, which falls as 1/Fz: channel noise, and the plate's own
+    inertial and ringing loads when the foot's strike moves the compliant hinge, weigh most
+    where the load is small. The low-pass is not used: it would smear the force's rise over the
+    following samples. With the weight every term is a product of raw signals (no division).
     """
-    n = max(2, round(span_ms * fs / 1000.0))
+    n = max(degree + 1, round(span_ms * fs / 1000.0))
     last = grf_z.shape[-1] - 1
     index = np.minimum(event[:, None] + np.arange(n), last)
     before = np.take_along_axis(grf_z, np.maximum(event - 1, 0)[:, None], axis=-1)[:, 0]
@@ -300,12 +301,16 @@ def _cop_at_contact(
     with np.errstate(invalid="ignore", divide="ignore"):
         crossing = np.clip((threshold_n - at) / (at - before), -1.0, 0.0)  # samples from event
     fz = np.take_along_axis(grf_z, index, axis=-1)
-    weight, weighted_cop = fz**2, fz * np.take_along_axis(moment, index, axis=-1)
-    t = np.arange(n, dtype=float) - np.nan_to_num(crossing)[:, None]
-    s0, s1, s2 = weight.sum(-1), (weight * t).sum(-1), (weight * t**2).sum(-1)
-    c0, c1 = weighted_cop.sum(-1), (weighted_cop * t).sum(-1)
+    t = (np.arange(n) - np.nan_to_num(crossing)[:, None]) / n  # 0 at the crossing
+    powers = t[..., None] ** np.arange(degree + 1)  # (n_trials, n, degree + 1)
+    weighted = powers * fz[..., None]
+    gram = np.einsum("tnp,tnq->tpq", weighted, weighted)
+    rhs = np.einsum("tnp,tn->tp", weighted, np.take_along_axis(moment, index, axis=-1))
     with np.errstate(invalid="ignore", divide="ignore"):
-        return (s2 * c0 - s1 * c1) / (s0 * s2 - s1**2)
+        singular = np.abs(np.linalg.det(gram)) < np.finfo(float).tiny
+        gram[singular] = np.eye(degree + 1)
+        coef = np.linalg.solve(gram, rhs[..., None])[..., 0]
+    return np.where(singular, np.nan, coef[:, 0])
 
 
 def samples(ms: float, fs: float) -> int:
