@@ -200,7 +200,7 @@ def walking_field(i, name, value):
         ),
         (
             walking_field(2, "trial", 2.0),
-            r"bad\.mat: session\.walking\(3\): duplicate trial 2 "
+            r"bad\.mat: session\.walking\(3\): duplicate trial '2' "
             r"\(already at session\.walking\(2\)\)",
         ),
     ],
