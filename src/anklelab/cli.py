@@ -11,6 +11,7 @@ from anklelab.commands import (
     analyze,
     capstan,
     demo,
+    forceplate,
     identify,
     importer,
     platform,
@@ -30,6 +31,7 @@ app.add_typer(platform.app, name="platform")
 app.add_typer(session.app, name="session")
 app.command("import")(importer.import_session)
 app.command("analyze")(analyze.analyze)
+app.command("forceplate")(forceplate.forceplate)
 app.add_typer(identify.app, name="identify")
 app.add_typer(simulate.app, name="simulate")
 app.add_typer(capstan.app, name="capstan")

@@ -54,6 +54,7 @@ __all__ = [
     "SixAxisPlate",
     "ankle_torque",
     "channels_from_load",
+    "kistler_matrix",
     "plate_class",
     "resultants",
     "sagittal_load",
@@ -70,6 +71,23 @@ SAGITTAL_SIGNALS = ("grf_x", "grf_z", "grf_z_cop_x")
 AnteriorAxis = Literal["+x", "-x", "+y", "-y"]
 DEFAULT_MIN_FZ_N = 1.0
 """Below this vertical force the COP is undefined (returned as NaN), N."""
+
+
+def kistler_matrix(a_m: float, b_m: float) -> NDArray[np.float64]:
+    """The 6x8 map from the 8 Kistler channels (:data:`CHANNELS` order) to (Fx, Fy, Fz, Mx, My,
+    Mz) about the centre of the sensor plane, for sensor offsets ``a_m``, ``b_m`` (m)."""
+    a, b = a_m, b_m
+    return np.array(
+        [
+            [1, 1, 0, 0, 0, 0, 0, 0],
+            [0, 0, 1, 1, 0, 0, 0, 0],
+            [0, 0, 0, 0, 1, 1, 1, 1],
+            [0, 0, 0, 0, b, b, -b, -b],
+            [0, 0, 0, 0, -a, a, a, -a],
+            [-b, b, a, -a, 0, 0, 0, 0],
+        ],
+        dtype=float,
+    )
 
 
 class _LinearPlate(Parameters):
@@ -147,18 +165,7 @@ class PlateGeometry(_LinearPlate):
 
     def matrix(self) -> NDArray[np.float64]:
         """The 6x8 map from channels (:data:`CHANNELS` order) to (Fx, Fy, Fz, Mx, My, Mz)."""
-        a, b = self.a_m, self.b_m
-        return np.array(
-            [
-                [1, 1, 0, 0, 0, 0, 0, 0],
-                [0, 0, 1, 1, 0, 0, 0, 0],
-                [0, 0, 0, 0, 1, 1, 1, 1],
-                [0, 0, 0, 0, b, b, -b, -b],
-                [0, 0, 0, 0, -a, a, a, -a],
-                [-b, b, a, -a, 0, 0, 0, 0],
-            ],
-            dtype=float,
-        )
+        return kistler_matrix(self.a_m, self.b_m)
 
 
 class SixAxisPlate(_LinearPlate):
