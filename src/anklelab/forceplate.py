@@ -54,10 +54,12 @@ __all__ = [
     "SixAxisPlate",
     "ankle_torque",
     "channels_from_load",
+    "cop_from_moment",
     "kistler_matrix",
     "plate_class",
     "resultants",
     "sagittal_load",
+    "sagittal_matrix",
 ]
 
 CHANNELS = ("fx12", "fx34", "fy14", "fy23", "fz1", "fz2", "fz3", "fz4")
@@ -116,17 +118,8 @@ class _LinearPlate(Parameters):
         return data
 
     def sagittal_matrix(self) -> NDArray[np.float64]:
-        """The ``(3, n_channels)`` map from the channels to :data:`SAGITTAL_SIGNALS`.
-
-        Read off :func:`resultants` and :func:`sagittal_load` by probing them with unit channel
-        loads (on top of a vertical load, so the COP is defined), which keeps every sign and
-        mounting convention in those two functions.
-        """
-        base = channels_from_load([0.0, 0.0, 100.0], [0.0, 0.0], self, axis=0)
-        probes = np.vstack([base, base + np.eye(len(self.channels))])
-        load = sagittal_load(resultants(probes, self, axis=-1), self.anterior_axis)
-        values = np.stack([load.grf_x, load.grf_z, load.grf_z * load.cop_x])
-        return values[:, 1:] - values[:, :1]
+        """The ``(3, n_channels)`` map to :data:`SAGITTAL_SIGNALS` (:func:`sagittal_matrix`)."""
+        return sagittal_matrix(self)
 
     def lab_load(
         self, data: ArrayLike, *, min_fz_n: float = DEFAULT_MIN_FZ_N, axis: int = -2
@@ -223,7 +216,7 @@ class GrfCopPlate(Parameters):
 
     def sagittal_matrix(self) -> NDArray[np.float64]:
         """The identity: :meth:`load_signals` are already the sagittal signals."""
-        return np.eye(3)
+        return sagittal_matrix(self)
 
     def lab_load(
         self, data: ArrayLike, *, min_fz_n: float = DEFAULT_MIN_FZ_N, axis: int = -2
@@ -362,11 +355,29 @@ def resultants(
     c = np.moveaxis(np.asarray(channels, dtype=float), axis, -1)
     _check_count(c.shape[-1], geometry, axis)
     fx, fy, fz, mx, my, mz = np.moveaxis(c @ geometry.matrix().T, -1, 0)
-    with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
-        loaded = np.abs(fz) > min_fz_n
-        ax = np.where(loaded, (fx * geometry.az0_m - my) / fz, np.nan)
-        ay = np.where(loaded, (fy * geometry.az0_m + mx) / fz, np.nan)
+    ax = cop_from_moment(fx * geometry.az0_m - my, fz, min_fz_n=min_fz_n)
+    ay = cop_from_moment(fy * geometry.az0_m + mx, fz, min_fz_n=min_fz_n)
     return Resultants(fx, fy, fz, mx, my, mz, ax, ay)
+
+
+def cop_from_moment(
+    moment: ArrayLike, force_z: ArrayLike, *, min_fz_n: float = 1.0
+) -> NDArray[np.float64]:
+    """Centre of pressure ``moment / force_z``, NaN where ``|force_z| <= min_fz_n``.
+
+    Every COP of the package is computed here: a moment (N·m) about an axis through the origin,
+    divided by the vertical force (N), gives the COP coordinate (m) along the perpendicular
+    horizontal axis.
+
+    Examples
+    --------
+    >>> cop_from_moment([35.0, 0.5], [700.0, 0.5]).tolist()
+    [0.05, nan]
+    """
+    moment = np.asarray(moment, dtype=float)
+    force_z = np.asarray(force_z, dtype=float)
+    with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
+        return np.where(np.abs(force_z) > min_fz_n, moment / force_z, np.nan)
 
 
 def channels_from_load(
@@ -455,6 +466,36 @@ def sagittal_load(res: Resultants, anterior_axis: AnteriorAxis = "+x") -> Sagitt
         grf_z=res.fz,
         cop_x=sign * getattr(res, cop_name),
     )
+
+
+def sagittal_matrix(geometry: ForcePlate) -> NDArray[np.float64]:
+    """The ``(3, n_signals)`` map from a plate's load signals to :data:`SAGITTAL_SIGNALS`,
+    ``(grf_x, grf_z, grf_z * cop_x)`` in the walking frame.
+
+    For the linear plates the load signals are the channels (``(3, 8)`` for ``kistler8``,
+    ``(3, 6)`` for ``six_axis``): all three are linear in the channels (the COP times the
+    vertical force is a moment), so a trial's sagittal load can be filtered and corrected as
+    three signals and the COP taken once, with :func:`cop_from_moment`, where it is needed. The
+    rows follow :func:`resultants` and :func:`sagittal_load` for the plate's ``anterior_axis``.
+    A ``grf_cop`` plate's load signals are already the sagittal signals (the identity).
+
+    Examples
+    --------
+    >>> g = PlateGeometry(a_m=0.12, b_m=0.2, az0_m=-0.045, anterior_axis="-y")
+    >>> c = channels_from_load([0.0, -20.0, 700.0], [0.01, -0.06], g, axis=0)
+    >>> grf_x, grf_z, moment = sagittal_matrix(g) @ c
+    >>> [round(float(v), 9) for v in (grf_x, grf_z, moment / grf_z)]
+    [-20.0, 700.0, 0.06]
+    """
+    if isinstance(geometry, GrfCopPlate):
+        return np.eye(3)
+    force_name, _, sign = _ANTERIOR[geometry.anterior_axis]
+    fx, fy, fz, mx, my, _ = geometry.matrix()
+    if force_name == "fx":
+        force, moment = fx, geometry.az0_m * fx - my
+    else:
+        force, moment = fy, geometry.az0_m * fy + mx
+    return np.stack([-sign * force, fz, sign * moment])
 
 
 def ankle_torque(

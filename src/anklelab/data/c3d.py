@@ -42,7 +42,7 @@ from numpy.typing import NDArray
 
 from anklelab.data._isolated import IsolatedFailure, map_isolated
 from anklelab.errors import SessionFormatError
-from anklelab.forceplate import kistler_matrix
+from anklelab.forceplate import cop_from_moment, kistler_matrix
 
 __all__ = [
     "SUPPORTED_PLATE_TYPES",
@@ -464,11 +464,8 @@ def plate_load(c3d: C3DFile, plate: C3DPlate, *, min_force_n: float = 10.0) -> G
     """
     force, moment, to_surface = plate_wrench(c3d, plate)
     surface = moment + np.cross(force, to_surface, axis=0)  # moment about the surface centre
-    fz = force[2]
-    with np.errstate(invalid="ignore", divide="ignore"):
-        loaded = np.abs(fz) >= min_force_n
-        x = np.where(loaded, -surface[1] / fz, np.nan)
-        y = np.where(loaded, surface[0] / fz, np.nan)
+    x = cop_from_moment(-surface[1], force[2], min_fz_n=min_force_n)
+    y = cop_from_moment(surface[0], force[2], min_fz_n=min_force_n)
     if plate.cop_poly is not None:
         # the manufacturer's correction acts on the COP in the file's units
         p = plate.cop_poly
