@@ -9,13 +9,13 @@ import numpy as np
 
 from anklelab.data.session import Session
 from anklelab.errors import AnklelabWarning, ParameterError, SessionFormatError
-from anklelab.forceplate import CHANNELS
 from anklelab.ident.bench import bench_stiffness
 from anklelab.ident.irf import PlatformFilters
 from anklelab.pipelines.walking.calibration import (
     check_calibration_lengths,
     fit_platform_filters,
     score_filters,
+    uncorrected_moment,
 )
 from anklelab.pipelines.walking.impedance import condition_order, timing_point
 from anklelab.pipelines.walking.results import WalkingResults
@@ -60,13 +60,14 @@ def analyze_walking(
     if filters is None:
         filters, filter_vaf, filter_vaf_by_channel = fit_platform_filters(session, settings)
     else:
-        if not np.isclose(filters.fs_, fs) or tuple(filters.channels) != CHANNELS:
+        plate = session.info.force_plate
+        if not np.isclose(filters.fs_, fs) or tuple(filters.channels) != plate.signals:
             raise ParameterError(
                 f"filters: fitted at {filters.fs_:g} Hz on channels {filters.channels}; the "
-                f"session is sampled at {fs:g} Hz with channels {CHANNELS}"
+                f"session is sampled at {fs:g} Hz with channels {plate.signals}"
             )
         check_calibration_lengths(filters, session.calibration, fs)
-        filter_vaf, filter_vaf_by_channel = score_filters(filters, session.calibration)
+        filter_vaf, filter_vaf_by_channel = score_filters(filters, session.calibration, plate)
     report(STEPS[1])
     stance, mislabelled = stance_trials(session, settings, filters)
     unperturbed = stance["none"]
@@ -83,7 +84,8 @@ def analyze_walking(
             f"walking/trials.csv: no usable perturbed trials, so no impedance can be estimated; "
             f"{drops}"
         )
-    for message in mislabelled:
+    notes = [*mislabelled, *uncorrected_moment(session)]
+    for message in notes:
         warnings.warn(message, AnklelabWarning, stacklevel=2)
     report(STEPS[2])
     rng = np.random.default_rng(settings.seed)
@@ -101,5 +103,5 @@ def analyze_walking(
         timing_points=points,
         bench=bench_stiffness(session.bench),
         stance=stance,
-        warnings=tuple(mislabelled),
+        warnings=tuple(notes),
     )

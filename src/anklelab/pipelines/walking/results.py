@@ -93,7 +93,9 @@ class WalkingResults:
         ``onset_ms`` (after heel contact) and a drop log naming why each other trial was dropped.
     warnings : tuple of str
         Conditions of the manifest that lost every trial because the detected onsets disagree
-        with their ``delay_ms`` (each also issued as an :class:`~anklelab.errors.AnklelabWarning`).
+        with their ``delay_ms``, and a ``grf_cop`` session whose calibration COP is empty (the
+        platform's own moment is then not removed); each is also issued as an
+        :class:`~anklelab.errors.AnklelabWarning`.
     """
 
     settings: WalkingSettings
