@@ -13,7 +13,7 @@ from anklelab.commands import (
     demo,
     forceplate,
     identify,
-    importer,
+    imports,
     platform,
     report,
     session,
@@ -29,7 +29,7 @@ app = typer.Typer(
 )
 app.add_typer(platform.app, name="platform")
 app.add_typer(session.app, name="session")
-app.command("import")(importer.import_session)
+app.add_typer(imports.app, name="import")
 app.command("analyze")(analyze.analyze)
 app.command("forceplate")(forceplate.forceplate)
 app.add_typer(identify.app, name="identify")
