@@ -18,6 +18,7 @@ from anklelab.commands import (
     report,
     session,
     simulate,
+    tree,
 )
 from anklelab.errors import AnklelabError
 
@@ -32,6 +33,7 @@ app.add_typer(session.app, name="session")
 app.add_typer(imports.app, name="import")
 app.command("analyze")(analyze.analyze)
 app.command("forceplate")(forceplate.forceplate)
+app.command("inspect")(tree.inspect)
 app.add_typer(identify.app, name="identify")
 app.add_typer(simulate.app, name="simulate")
 app.add_typer(capstan.app, name="capstan")

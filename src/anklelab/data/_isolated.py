@@ -43,7 +43,9 @@ class IsolatedFailure(RuntimeError):
 
 def _start(script: Path, function: str) -> subprocess.Popen[bytes]:
     return subprocess.Popen(
-        [sys.executable, __file__, str(script), function],
+        # -P: the script's directory (this package's, which has an inspect.py) must not
+        # shadow the standard library
+        [sys.executable, "-P", __file__, str(script), function],
         stdin=subprocess.PIPE,
         stdout=subprocess.PIPE,
         stderr=subprocess.DEVNULL,
