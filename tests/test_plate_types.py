@@ -55,15 +55,15 @@ def six_axis(session):
     return with_plate(session, plate, convert)
 
 
-def grf_cop(session, calibration_min_fz_n):
-    """GRF and COP in a lab frame whose walking direction is -y (origin elsewhere), the COP
-    empty where |Fz| is at most ``calibration_min_fz_n`` in calibration trials, and 0 N (only
-    where undefined) in walking trials."""
+def grf_cop(session, calibration_min_fz_n, plate_centre_m=(0.0, 0.0)):
+    """GRF and COP in a lab frame whose walking direction is -y and whose origin is 2 m from the
+    plate, the COP empty where |Fz| is at most ``calibration_min_fz_n`` in calibration trials and
+    where it is 0 N (undefined) in walking trials."""
     geometry = session.info.force_plate
 
     def convert(channels, min_fz_n):
         lab = geometry.lab_load(channels, min_fz_n=min_fz_n, axis=0)
-        # lab x = the walker's left, lab y = backwards
+        # lab x = the walker's left, lab y = backwards; the plate's centre at (0.4, 2.0)
         return {
             "grf_x_n": lab.grf_y,
             "grf_y_n": -lab.grf_x,
@@ -72,11 +72,10 @@ def grf_cop(session, calibration_min_fz_n):
             "cop_y_m": 2.0 - lab.cop_x,
         }
 
-    exported = with_plate(session, GrfCopPlate(anterior_axis="-y"), lambda c: convert(c, 0.0))
-    calibration = with_plate(
-        session, GrfCopPlate(anterior_axis="-y"), lambda c: convert(c, calibration_min_fz_n)
-    ).calibration
-    return dataclasses.replace(exported, calibration=calibration)
+    plate = GrfCopPlate(anterior_axis="-y", plate_centre_m=plate_centre_m)
+    exported = with_plate(session, plate, lambda c: convert(c, 0.0))
+    calibration = with_plate(session, plate, lambda c: convert(c, calibration_min_fz_n))
+    return dataclasses.replace(exported, calibration=calibration.calibration)
 
 
 def relative(results, native, quantity="stiffness"):
@@ -117,15 +116,18 @@ def test_grf_cop_gives_the_native_results_when_the_calibration_cop_is_recorded(t
 
 def test_grf_cop_without_calibration_cop_is_flagged(twin):
     """An export that leaves the COP of the unloaded plate empty (here below 10 N) cannot
-    remove the platform's own moment: the analysis says so. The uncorrected top plate shows up
-    as a lower ankle inertia at every timing point (by 0.05 kg·m² on average here) and a higher
-    stiffness (by 0.9-2.9 % here; 0.2-10 % with 8 trials per point)."""
+    teach the platform filters the plate's moment: the analysis says so. The moment is then
+    taken as zero about ``plate_centre_m``: declared, the stiffness stays within 1 % (measured
+    0.6-0.9 % on two seeds with 8 trials per point); left at the lab origin 2 m away, the
+    plate's vertical inertial force acts on that 2 m lever (measured 2.7-3.2 %)."""
     session, native = twin
-    with pytest.warns(AnklelabWarning, match=r"calibration/: the centre of pressure \(cop_y_m\)"):
-        results = analyze_walking(grf_cop(session, 10.0), SETTINGS)
-    assert any("platform's own moment" in w for w in results.warnings)
-    assert (relative(results, native, "inertia") < 0).all()
-    assert (relative(results, native) > 0).all()
+    errors = {}
+    for centre in ((0.4, 2.0), (0.0, 0.0)):
+        with pytest.warns(AnklelabWarning, match=r"calibration/: the centre of pressure"):
+            results = analyze_walking(grf_cop(session, 10.0, centre), SETTINGS)
+        assert any("platform's own moment" in w for w in results.warnings)
+        errors[centre] = np.abs(relative(results, native)).max()
+    assert errors[(0.4, 2.0)] < 0.015 < errors[(0.0, 0.0)]
 
 
 def test_text_labels_analyse_exactly_like_integer_labels(twin, tmp_path):

@@ -34,7 +34,7 @@ from typing import TYPE_CHECKING, ClassVar, Literal
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
-from pydantic import Field
+from pydantic import Field, field_validator
 
 from anklelab._params import Parameters
 from anklelab.errors import EventNotFoundError, ParameterError
@@ -195,6 +195,11 @@ class GrfCopPlate(Parameters):
     ----------
     anterior_axis : {"+x", "-x", "+y", "-y"}
         Lab axis that points in the walking direction.
+    plate_centre_m : (float, float)
+        Lab x and y of the centre of the plate surface, m: the walking-frame COP is taken
+        relative to it. The analysis does not need it when the calibration trials record the
+        COP, but where they leave it empty the platform filters cannot learn the plate's moment,
+        which is then taken as zero about this point (see :meth:`load_signals`).
     """
 
     type: ClassVar[str] = "grf_cop"
@@ -202,9 +207,23 @@ class GrfCopPlate(Parameters):
     nullable: ClassVar[tuple[str, ...]] = ("cop_x_m", "cop_y_m")
     signals: ClassVar[tuple[str, ...]] = SAGITTAL_SIGNALS
     anterior_axis: AnteriorAxis = "+x"
+    plate_centre_m: tuple[float, float] = (0.0, 0.0)
+
+    @field_validator("plate_centre_m", mode="before")
+    @classmethod
+    def _pair(cls, value: object) -> object:
+        """Accept any sequence of two numbers (TOML array, HDF5 or MATLAB vector)."""
+        if isinstance(value, list | np.ndarray):
+            return tuple(float(v) if isinstance(v, np.floating) else v for v in list(value))
+        return value
 
     def load_signals(self, data: ArrayLike, *, axis: int = -2) -> NDArray[np.float64]:
         """The sagittal signals, per sample: ``grf_z * cop_x`` is 0 where the COP is empty.
+
+        ``cop_x`` is relative to ``plate_centre_m``. The moment is linear in the load wherever
+        the COP is recorded, so the platform filters model and remove it there; where the COP is
+        empty (an unloaded plate in processed exports) the moment is taken as zero about the
+        plate's centre, which is where the plate's own moment is smallest.
 
         Returns an array with :data:`SAGITTAL_SIGNALS` on ``axis``.
         """
@@ -221,7 +240,8 @@ class GrfCopPlate(Parameters):
     def lab_load(
         self, data: ArrayLike, *, min_fz_n: float = DEFAULT_MIN_FZ_N, axis: int = -2
     ) -> LabLoad:
-        """GRF and COP turned into the walking frame; the free moment is unknown (NaN).
+        """GRF and COP (relative to ``plate_centre_m``) turned into the walking frame; the free
+        moment is unknown (NaN).
 
         ``min_fz_n`` is accepted for symmetry with the linear plates and ignored: the COP is
         as recorded.
@@ -230,7 +250,8 @@ class GrfCopPlate(Parameters):
         _check_count(c.shape[-1], self, axis)
         rotation = _walking_rotation(self.anterior_axis, z_down=False)
         grf = c[..., :3] @ rotation.T
-        cop = np.concatenate([c[..., 3:5], np.zeros_like(c[..., :1])], axis=-1) @ rotation.T
+        cop = c[..., 3:5] - np.asarray(self.plate_centre_m)
+        cop = np.concatenate([cop, np.zeros_like(c[..., :1])], axis=-1) @ rotation.T
         return LabLoad(
             *np.moveaxis(grf, -1, 0), *np.moveaxis(cop, -1, 0)[:2], np.full(c.shape[:-1], np.nan)
         )

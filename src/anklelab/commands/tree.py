@@ -9,9 +9,7 @@ import typer
 
 
 def inspect(
-    file: Annotated[
-        Path, typer.Argument(metavar="FILE", help="A .mat, .c3d or HDF5 (.h5) file.")
-    ],
+    file: Annotated[Path, typer.Argument(metavar="FILE", help="A .mat, .c3d or HDF5 (.h5) file.")],
 ) -> None:
     """Print a file's tree: names, shapes and types, and a C3D file's channels, force platforms,
     events and parameters."""

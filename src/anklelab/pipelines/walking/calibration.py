@@ -129,6 +129,8 @@ def uncorrected_moment(session: Session) -> list[str]:
     return [
         f"calibration/: the centre of pressure ({column}) is empty in {empty:.0%} of the "
         "calibration samples of this grf_cop session, so the platform filters cannot remove the "
-        "platform's own moment from the ankle torque: stiffness and inertia are biased (export "
-        "the calibration trials' COP at every sample; see the 'Lab data formats' guide)"
+        "platform's own moment from the ankle torque (it is taken as zero about "
+        f"plate_centre_m = {list(plate.plate_centre_m)}): stiffness and inertia may be biased "
+        "by a few percent (export the calibration trials' COP at every sample; see the guide "
+        "'Lab data formats')"
     ]
