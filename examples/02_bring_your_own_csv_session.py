@@ -87,8 +87,8 @@ for number, recording in enumerate(lab.calibration, start=1):
 with open(root / "walking" / "trials.csv", "w", newline="") as f:
     manifest = csv.writer(f)
     manifest.writerow(["trial", "file", "perturbed", "direction", "delay_ms"])
-    for trial in lab.walking:
-        name = f"trial_{trial.trial}.csv"
+    for number, trial in enumerate(lab.walking, start=1):
+        name = f"trial_{number:04d}.csv"
         write_csv(root / "walking" / name, trial.recording.columns)
         delay = "" if not trial.perturbed else f"{trial.delay_ms:g}"
         manifest.writerow([trial.trial, name, int(trial.perturbed), trial.direction, delay])
@@ -97,8 +97,8 @@ with open(root / "walking" / "trials.csv", "w", newline="") as f:
 with open(root / "bench" / "tests.csv", "w", newline="") as f:
     manifest = csv.writer(f)
     manifest.writerow(["test", "file", "distance_m"])
-    for test in lab.bench:
-        name = f"bench_{test.test}.csv"
+    for number, test in enumerate(lab.bench, start=1):
+        name = f"bench_{number:02d}.csv"
         write_csv(root / "bench" / name, test.recording.columns)
         manifest.writerow([test.test, name, test.distance_m])
 
