@@ -17,10 +17,10 @@ import pytest
 from anklelab.data import load_session
 from anklelab.data.c3d_import import import_c3d
 from anklelab.errors import ParameterError, SessionFormatError
-from anklelab.experiments import simulate_perturberator
 from anklelab.forceplate import CHANNELS
 from anklelab.pipelines import WalkingSettings, analyze_walking
 from tests.c3d_files import write_c3d
+from tests.lab_twin import small_twin
 
 MAP = Path(__file__).parents[1] / "examples" / "maps" / "c3d_kistler.toml"
 SETTINGS = WalkingSettings(bootstrap_reps=20)
@@ -91,14 +91,7 @@ def export_session(session, root, *, events=False):
 
 @pytest.fixture(scope="module")
 def twin(tmp_path_factory):
-    session = simulate_perturberator(
-        trials_per_point=5,
-        n_unperturbed=10,
-        n_calibration=2,
-        seed=3,
-        bench=False,
-        time_courses=False,
-    )
+    session = small_twin()
     root = export_session(session, tmp_path_factory.mktemp("c3d") / "trials")
     return session, root, analyze_walking(session, SETTINGS)
 

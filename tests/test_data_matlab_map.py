@@ -17,9 +17,9 @@ from hypothesis import strategies as st
 
 from anklelab.data.matlab_map import import_matlab
 from anklelab.errors import AnklelabError, ParameterError, SessionFormatError
-from anklelab.experiments import simulate_perturberator
 from anklelab.forceplate import CHANNELS
 from anklelab.pipelines import WalkingSettings, analyze_walking
+from tests.lab_twin import small_twin
 
 MAP = Path(__file__).parents[1] / "examples" / "maps" / "matlab_grf_cop.toml"
 SETTINGS = WalkingSettings(bootstrap_reps=20)
@@ -89,14 +89,7 @@ def write_layout(path, session, subject="S07"):
 
 @pytest.fixture(scope="module")
 def twin(tmp_path_factory):
-    session = simulate_perturberator(
-        trials_per_point=5,
-        n_unperturbed=10,
-        n_calibration=2,
-        seed=3,
-        bench=False,
-        time_courses=False,
-    )
+    session = small_twin()
     path = write_layout(tmp_path_factory.mktemp("mat") / "S07.mat", session)
     return session, path
 

@@ -11,18 +11,16 @@ import pytest
 
 from anklelab.data import Recording, load_session, save_session
 from anklelab.errors import AnklelabWarning
-from anklelab.experiments import simulate_perturberator
 from anklelab.forceplate import CHANNELS, GrfCopPlate, SixAxisPlate, resultants
 from anklelab.pipelines import WalkingSettings, analyze_walking
+from tests.lab_twin import small_twin
 
 SETTINGS = WalkingSettings(bootstrap_reps=20)
 
 
 @pytest.fixture(scope="module")
 def twin():
-    session = simulate_perturberator(
-        trials_per_point=5, n_unperturbed=10, n_calibration=2, seed=3, time_courses=False
-    )
+    session = small_twin(bench=True)
     return session, analyze_walking(session, SETTINGS)
 
 

@@ -9,9 +9,11 @@ force channels, moments for ``mx``, ``my``, ``mz``, times for ``time_s``.
 
 from __future__ import annotations
 
+import hashlib
 import math
 import tomllib
-from collections.abc import Mapping
+from collections.abc import Iterator, Mapping
+from contextlib import contextmanager
 from pathlib import Path
 from typing import Any, TypeVar
 
@@ -25,7 +27,15 @@ from anklelab.data.session import SessionInfo
 from anklelab.errors import ParameterError, SessionFormatError
 from anklelab.forceplate import CHANNELS, SIX_AXIS_CHANNELS
 
-__all__ = ["UNITS", "ColumnMap", "column_quantity", "read_map", "session_info"]
+__all__ = [
+    "UNITS",
+    "ColumnMap",
+    "column_quantity",
+    "import_provenance",
+    "naming_the_mapping",
+    "read_map",
+    "session_info",
+]
 
 UNITS: dict[str, dict[str, float]] = {
     "angle": {"rad": 1.0, "deg": math.pi / 180.0},
@@ -163,3 +173,31 @@ def session_info(
     except SessionFormatError as exc:
         message = str(exc).removeprefix("<map>: ").replace("session.force_plate.", "plate.")
         raise ParameterError(message) from None
+
+
+@contextmanager
+def naming_the_mapping(path: Path) -> Iterator[None]:
+    """Prefix the mapping file to a :class:`ParameterError` (an error in one of its keys)."""
+    try:
+        yield
+    except ParameterError as exc:
+        raise ParameterError(f"{path}: {exc}") from None
+
+
+def import_provenance(source: Path, importer: str, mapping: Path) -> dict[str, Any]:
+    """The provenance of a session imported from ``source`` through ``mapping``: anklelab's
+    version, the source's content hash and the mapping's SHA-256."""
+    from anklelab._version import __version__
+    from anklelab.data.store import session_hash
+
+    return {
+        "anklelab_version": __version__,
+        "source_sha256": session_hash(source),
+        "import": {
+            "anklelab_version": __version__,
+            "importer": importer,
+            "source_name": source.name,
+            "mapping": mapping.name,
+            "mapping_sha256": hashlib.sha256(mapping.read_bytes()).hexdigest(),
+        },
+    }

@@ -25,7 +25,6 @@ from __future__ import annotations
 
 import csv
 import fnmatch
-import hashlib
 import io
 import math
 import re
@@ -37,10 +36,17 @@ from numpy.typing import NDArray
 from pydantic import Field
 
 from anklelab._params import Parameters
-from anklelab._version import __version__
 from anklelab.data._checks import check_walking_row
-from anklelab.data._mapping import ColumnMap, SessionTable, read_map, session_info
+from anklelab.data._mapping import (
+    ColumnMap,
+    SessionTable,
+    import_provenance,
+    naming_the_mapping,
+    read_map,
+    session_info,
+)
 from anklelab.data.c3d import C3DFile, C3DPlate, plate_load, plate_wrench, read_c3d_files
+from anklelab.data.directory import _flag, _float  # the manifest cells' rules
 from anklelab.data.session import BenchTest, Recording, Session, WalkingTrial, label_text
 from anklelab.errors import ParameterError, SessionFormatError
 from anklelab.forceplate import CHANNELS, GRF_COP_CHANNELS, SIX_AXIS_CHANNELS
@@ -280,36 +286,15 @@ def _label(row: dict[str, str], path: Path) -> str:
     return label_text(row.get("label") or path.stem, f"{row['_where']}, column 'label'")
 
 
-def _number(row: dict[str, str], column: str, *, empty_ok: bool = False) -> float:
-    text = row.get(column, "")
-    if empty_ok and text.lower() in ("", "nan"):
-        return math.nan
-    try:
-        return float(text)
-    except ValueError:
-        raise SessionFormatError(
-            f"{row['_where']}, column {column!r}: got {text!r}; expected a number"
-        ) from None
-
-
 def _walking(c3d: C3DFile, row: dict[str, str], recording: Recording) -> WalkingTrial:
     where = row["_where"]
-    flags = {"0": False, "1": True, "false": False, "true": True}
-    perturbed = flags.get(row.get("perturbed", "").lower())
-    if perturbed is None:
-        raise SessionFormatError(
-            f"{where}, column 'perturbed': got {row.get('perturbed')!r}; expected 0 or 1"
-        )
+    perturbed = _flag(row.get("perturbed", ""), where, "perturbed")
     direction = row.get("direction", "").lower()
-    delay = _number(row, "delay_ms", empty_ok=True)
+    delay = _float(row.get("delay_ms", ""), where, "delay_ms", empty_ok=True)
     check_walking_row(where, perturbed, direction, delay)
     known = {"file", "role", "label", "perturbed", "direction", "delay_ms", "distance_m", "_where"}
     extra = {k: v for k, v in row.items() if k not in known}
     return WalkingTrial(_label(row, c3d.path), recording, perturbed, direction, delay, extra)  # type: ignore[arg-type]
-
-
-def _sha256(path: Path) -> str:
-    return hashlib.sha256(path.read_bytes()).hexdigest()
 
 
 def import_c3d(directory: str | Path, mapping: str | Path, *, workers: int = 2) -> Session:
@@ -341,15 +326,11 @@ def import_c3d(directory: str | Path, mapping: str | Path, *, workers: int = 2) 
     if not root.is_dir():
         raise SessionFormatError(f"{root}: not a directory; expected a directory of C3D files")
     spec = read_map(mapping, C3DMapping, C3D_MAP_FORMAT)
-    try:
+    with naming_the_mapping(mapping):
         return _import(root, mapping, spec, workers)
-    except ParameterError as exc:  # a key of the mapping: name the mapping file
-        raise ParameterError(f"{mapping}: {exc}") from None
 
 
 def _import(root: Path, mapping: Path, spec: C3DMapping, workers: int) -> Session:
-    from anklelab.data.store import session_hash
-
     if isinstance(spec.trials, TrialsFromCsv):
         entries = _entries_from_csv(root, spec.trials)
     else:
@@ -374,7 +355,7 @@ def _import(root: Path, mapping: Path, spec: C3DMapping, workers: int) -> Sessio
                 c3d, spec.channels.displacement_m, "displacement_m", role
             )
             columns["force_n"] = _analog(c3d, spec.channels.force_n, "force_n", role)
-            distance = _number(row, "distance_m")
+            distance = _float(row.get("distance_m", ""), row["_where"], "distance_m")
             bench.append(
                 BenchTest(_label(row, path), Recording(f"{path.stem}.csv", columns), distance)
             )
@@ -401,17 +382,7 @@ def _import(root: Path, mapping: Path, spec: C3DMapping, workers: int) -> Sessio
         raise SessionFormatError(f"{root}: no calibration or walking trial to take the plate from")
     plate_table.setdefault("anterior_axis", "+x")
     info = session_info(spec.session, rate, plate_table)
-    provenance = {
-        "anklelab_version": __version__,
-        "source_sha256": session_hash(root),
-        "import": {
-            "anklelab_version": __version__,
-            "importer": "c3d",
-            "source_name": root.name,
-            "mapping": mapping.name,
-            "mapping_sha256": _sha256(mapping),
-        },
-    }
+    provenance = import_provenance(root, "c3d", mapping)
     return Session(info, tuple(calibration), tuple(walking), tuple(bench), None, provenance)
 
 

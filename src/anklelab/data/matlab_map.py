@@ -16,7 +16,6 @@ Trial labels are the matched path and the trial's index, ``S07.dorsiflexion.t225
 
 from __future__ import annotations
 
-import hashlib
 import math
 import re
 from collections.abc import Iterator, Mapping
@@ -28,9 +27,15 @@ from numpy.typing import NDArray
 from pydantic import Field, model_validator
 
 from anklelab._params import Parameters
-from anklelab._version import __version__
 from anklelab.data._checks import check_walking_row
-from anklelab.data._mapping import ColumnMap, SessionTable, read_map, session_info
+from anklelab.data._mapping import (
+    ColumnMap,
+    SessionTable,
+    import_provenance,
+    naming_the_mapping,
+    read_map,
+    session_info,
+)
 from anklelab.data.matlab import _load
 from anklelab.data.session import Recording, Session, WalkingTrial
 from anklelab.errors import ParameterError, SessionFormatError
@@ -286,15 +291,11 @@ def import_matlab(path: str | Path, mapping: str | Path, *, subject: str | None 
     if not path.is_file():
         raise SessionFormatError(f"{path}: file not found")
     spec = read_map(mapping, MatlabMapping, MATLAB_MAP_FORMAT)
-    try:
+    with naming_the_mapping(mapping):
         return _import(path, mapping, spec, subject)
-    except ParameterError as exc:  # a key of the mapping: name the mapping file
-        raise ParameterError(f"{mapping}: {exc}") from None
 
 
 def _import(path: Path, mapping: Path, spec: MatlabMapping, subject: str | None) -> Session:
-    from anklelab.data.store import session_hash
-
     tree = _load(path)
     groups = [("calibration", g) for g in spec.calibration] + [("walking", g) for g in spec.walking]
     matched = []
@@ -346,17 +347,7 @@ def _import(path: Path, mapping: Path, spec: MatlabMapping, subject: str | None)
                 continue
             walking.append(_walking_trial(group, captured, label, rec, trial_where))
     info = session_info(_with_subject(spec.session, chosen), rate, info_plate)
-    provenance = {
-        "anklelab_version": __version__,
-        "source_sha256": session_hash(path),
-        "import": {
-            "anklelab_version": __version__,
-            "importer": "matlab-map",
-            "source_name": path.name,
-            "mapping": mapping.name,
-            "mapping_sha256": hashlib.sha256(mapping.read_bytes()).hexdigest(),
-        },
-    }
+    provenance = import_provenance(path, "matlab-map", mapping)
     return Session(info, tuple(calibration), tuple(walking), (), None, provenance)
 
 
