@@ -228,24 +228,30 @@ def test_malformed_mapping_or_trial_list_is_named(twin, tmp_path, old, new, targ
 
 
 def test_import_c3d_command_and_default_import(twin, tmp_path):
+    from typer.testing import CliRunner
+
+    from anklelab.cli import app
+
     _, root, _ = twin
-    code = "from anklelab.cli import run; run()"
+    out = tmp_path / "s.h5"
+    result = CliRunner().invoke(
+        app, ["import", "c3d", str(root), "--map", str(MAP), "--out", str(out)]
+    )
+    assert result.exit_code == 0, result.output
+    assert "(kistler8 plate)" in result.output
 
     def run(*args):
+        code = "from anklelab.cli import run; run()"
         return subprocess.run(
             [sys.executable, "-c", code, *map(str, args)], capture_output=True, text=True
         )
 
-    out = tmp_path / "s.h5"
-    proc = run("import", "c3d", root, "--map", MAP, "--out", out)
-    assert proc.returncode == 0, proc.stderr
-    assert "(kistler8 plate)" in proc.stdout
     proc = run("import", "c3d", root, "--map", MAP, "--out", out)
     assert proc.returncode == 2 and re.search(r"s\.h5: already exists; pass --force", proc.stderr)
     proc = run("import", "c3d", root, "--map", MAP, "--out", root / "inside.h5")
     assert proc.returncode == 2 and "would land inside the input" in proc.stderr
     assert not (root / "inside.h5").exists()
     # the plain `anklelab import SOURCE` still takes a session
-    proc = run("import", out, "--out", tmp_path / "again.h5")
-    assert proc.returncode == 0, proc.stderr
+    result = CliRunner().invoke(app, ["import", str(out), "--out", str(tmp_path / "again.h5")])
+    assert result.exit_code == 0, result.output
     assert len(load_session(tmp_path / "again.h5").walking) == len(load_session(out).walking)
