@@ -459,7 +459,7 @@ def test_swapped_delay_labels_are_dropped_and_the_condition_named(early_late):
             reason,
         )
         assert match, reason
-        assert int(match[1]) == trial.trial and float(match[3]) == trial.delay_ms
+        assert match[1] == trial.trial and float(match[3]) == trial.delay_ms
         assert min(abs(float(match[2]) - t) for t in true) < 1.5  # the detected onset
     assert result.drop_counts() == {
         "onset differs from the manifest's delay_ms by more than 50 ms": 12

@@ -11,12 +11,14 @@ from anklelab.commands import (
     analyze,
     capstan,
     demo,
+    forceplate,
     identify,
-    importer,
+    imports,
     platform,
     report,
     session,
     simulate,
+    tree,
 )
 from anklelab.errors import AnklelabError
 
@@ -28,8 +30,10 @@ app = typer.Typer(
 )
 app.add_typer(platform.app, name="platform")
 app.add_typer(session.app, name="session")
-app.command("import")(importer.import_session)
+app.add_typer(imports.app, name="import")
 app.command("analyze")(analyze.analyze)
+app.command("forceplate")(forceplate.forceplate)
+app.command("inspect")(tree.inspect)
 app.add_typer(identify.app, name="identify")
 app.add_typer(simulate.app, name="simulate")
 app.add_typer(capstan.app, name="capstan")

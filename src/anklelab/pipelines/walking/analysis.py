@@ -9,13 +9,13 @@ import numpy as np
 
 from anklelab.data.session import Session
 from anklelab.errors import AnklelabWarning, ParameterError, SessionFormatError
-from anklelab.forceplate import CHANNELS
 from anklelab.ident.bench import bench_stiffness
 from anklelab.ident.irf import PlatformFilters
 from anklelab.pipelines.walking.calibration import (
     check_calibration_lengths,
     fit_platform_filters,
     score_filters,
+    uncorrected_moment,
 )
 from anklelab.pipelines.walking.checks import filter_summary, plausibility
 from anklelab.pipelines.walking.impedance import condition_order, estimate_timing_point
@@ -64,13 +64,14 @@ def analyze_walking(
     if filters is None:
         filters, filter_vaf, filter_vaf_by_channel = fit_platform_filters(session, settings)
     else:
-        if not np.isclose(filters.fs_, fs) or tuple(filters.channels) != CHANNELS:
+        plate = session.info.force_plate
+        if not np.isclose(filters.fs_, fs) or tuple(filters.channels) != plate.signals:
             raise ParameterError(
                 f"filters: fitted at {filters.fs_:g} Hz on channels {filters.channels}; the "
-                f"session is sampled at {fs:g} Hz with channels {CHANNELS}"
+                f"session is sampled at {fs:g} Hz with channels {plate.signals}"
             )
         check_calibration_lengths(filters, session.calibration, fs)
-        filter_vaf, filter_vaf_by_channel = score_filters(filters, session.calibration)
+        filter_vaf, filter_vaf_by_channel = score_filters(filters, session.calibration, plate)
     report(STEPS[1])
     stance, mislabelled = stance_trials(session, settings, filters)
     unperturbed = stance["none"]
@@ -87,7 +88,8 @@ def analyze_walking(
             f"walking/trials.csv: no usable perturbed trials, so no impedance can be estimated; "
             f"{drops}"
         )
-    for message in mislabelled:
+    uncorrected = uncorrected_moment(session)
+    for message in (*mislabelled, *uncorrected):
         warnings.warn(message, AnklelabWarning, stacklevel=2)
     report(STEPS[2])
     stance = _drop_unperturbed_outliers(stance, settings.outlier_mads)
@@ -113,7 +115,7 @@ def analyze_walking(
         timing_points=points,
         bench=bench_stiffness(session.bench),
         drops=_drop_counts(stance),
-        warnings=(*mislabelled, *notes),
+        warnings=(*mislabelled, *uncorrected, *notes),
         filters=filters,
         filter_vaf=filter_vaf,
         filter_vaf_by_channel=filter_vaf_by_channel,

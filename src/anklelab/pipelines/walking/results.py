@@ -259,7 +259,9 @@ class WalkingResults:
     drops : dict of str to int
         Dropped walking trials per kind of reason.
     warnings : tuple of str
-        Session-level doubts: manifest conditions that lost every trial, implausible results.
+        Session-level doubts: manifest conditions that lost every trial, a ``grf_cop`` session
+        whose calibration COP is empty (the platform's own moment is then not removed),
+        implausible results.
     filters, filter_vaf, filter_vaf_by_channel, stance
         In memory only (None when read from ``results.json``): the platform filters used, their
         held-out VAF per calibration trial, pooled ``(n_held,)`` and per channel

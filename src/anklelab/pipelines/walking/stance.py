@@ -17,7 +17,6 @@ from numpy.typing import NDArray
 from anklelab.data.session import Session, WalkingTrial
 from anklelab.errors import SessionFormatError
 from anklelab.forceplate import (
-    CHANNELS,
     SagittalLoad,
     ankle_torque,
     cop_from_moment,
@@ -141,8 +140,9 @@ def stance_trials(
     fs = info.sample_rate_hz
     if not walking:
         raise SessionFormatError("walking/trials.csv: the session has no walking trials")
+    plate = info.force_plate
     raw, lengths = stack_recordings(
-        [w.recording for w in walking], ("motor_angle", "ankle_angle", *CHANNELS)
+        [w.recording for w in walking], ("motor_angle", "ankle_angle", *plate.channels)
     )
     n_base = max(1, round(settings.baseline_ms * fs / 1000.0))
     n_filter = lowpass_min_samples(fs, settings.cutoff_hz, order=settings.filter_order)
@@ -156,10 +156,14 @@ def stance_trials(
             "walking/trials.csv: no walking trial is long enough to analyse: "
             + drop_summary(_first_reasons(too_short, len(walking)), walking)
         )
-    raw -= raw[..., :n_base].mean(axis=-1, keepdims=True)  # the ankle angle is re-zeroed later
-    motor, ankle_raw, channels = raw[:, 0], raw[:, 1], raw[:, 2:]
-    sagittal = sagittal_matrix(info.force_plate)
-    load_raw = np.einsum("sc,nct->nst", sagittal, channels)  # grf_x, grf_z, grf_z * cop_x
+    # the plate's signals that are linear in the load (its channels, or for GRF/COP data the
+    # sagittal signals); they, the motor and the ankle angle are zeroed over the baseline (the
+    # ankle angle is re-zeroed later)
+    signals = np.concatenate([raw[:, :2], plate.load_signals(raw[:, 2:])], axis=1)
+    signals -= signals[..., :n_base].mean(axis=-1, keepdims=True)
+    motor, ankle_raw = signals[:, 0], signals[:, 1]
+    sagittal = sagittal_matrix(plate)
+    load_raw = np.einsum("sc,nct->nst", sagittal, signals[:, 2:])  # grf_x, grf_z, grf_z * cop_x
     contact = heel_contact(
         load_raw[:, 1],
         fs,
