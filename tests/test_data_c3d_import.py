@@ -109,7 +109,7 @@ def test_c3d_round_trip_gives_the_native_stiffness(twin):
     assert [tp.key for tp in results.timing_points] == [tp.key for tp in native.timing_points]
     for a, b in zip(results.timing_points, native.timing_points, strict=True):
         # float32 storage is the only loss
-        assert np.mean(a.stiffness) == pytest.approx(np.mean(b.stiffness), rel=1e-3)
+        assert a.stiffness.mean == pytest.approx(b.stiffness.mean, rel=1e-3)
     assert imported.provenance["import"]["importer"] == "c3d"
 
 
@@ -128,7 +128,7 @@ def test_c3d_plate_stored_as_six_axis_or_grf_cop(twin, tmp_path, kind):
     # min_force_n), so the platform's moment is not removed and the analysis says so
     tolerance = 1e-3 if kind == "six_axis" else 0.15
     for a, b in zip(results.timing_points, native.timing_points, strict=True):
-        assert np.mean(a.stiffness) == pytest.approx(np.mean(b.stiffness), rel=tolerance)
+        assert a.stiffness.mean == pytest.approx(b.stiffness.mean, rel=tolerance)
     assert bool(results.warnings) == (kind == "grf_cop")
 
 

@@ -113,7 +113,7 @@ def test_shipped_map_reads_the_layout_and_gives_the_native_stiffness(twin):
     assert [tp.key for tp in results.timing_points] == [tp.key for tp in native.timing_points]
     for a, b in zip(results.timing_points, native.timing_points, strict=True):
         # the same loss as grf_cop (tests/test_plate_types.py): measured 0.10 % at most
-        assert np.mean(a.stiffness) == pytest.approx(np.mean(b.stiffness), rel=2e-3)
+        assert a.stiffness.mean == pytest.approx(b.stiffness.mean, rel=2e-3)
     assert imported.provenance["import"]["importer"] == "matlab-map"
 
 

@@ -94,6 +94,18 @@ def _summary(results: WalkingResults) -> Table:
     return table
 
 
+def _poorly_determined(results: WalkingResults) -> str:
+    """Which quantities are poorly determined at how many points ("" if none)."""
+    from anklelab.pipelines.walking.results import QUANTITIES
+
+    n = len(results.timing_points)
+    counts = {
+        q.name: sum(getattr(tp, q.name).poorly_determined for tp in results.timing_points)
+        for q in QUANTITIES
+    }
+    return ", ".join(f"{name} at {k} of {n} points" for name, k in counts.items() if k)
+
+
 def analyze(
     session_path: SessionArgument,
     out: Annotated[Path, typer.Option("--out", "-o", help="Directory for results and figures.")],
@@ -150,6 +162,8 @@ def analyze(
             save_walking_figures(results, out)
         step(total, total)
     console = Console()
+    if not console.is_terminal:  # a log or a pipe: never fold the table's rows
+        console.width = max(console.width, 200)
     console.print(_summary(results))
     counts = results.drop_counts()
     reasons = "; ".join(f"{n} {kind}" for kind, n in counts.items())
@@ -160,6 +174,9 @@ def analyze(
         f"{f' ({reasons})' if reasons else ''} (see trials.csv); results in {out}",
         markup=False,
     )
+    vague = _poorly_determined(results)
+    if vague:
+        console.print(f"≈ poorly determined: {vague} (intervals in results.json)", markup=False)
     point_warnings = [message for tp in results.timing_points for message in tp.warnings]
     for message in (*results.warnings, *point_warnings):
         console.print(f"warning: {message}", style="yellow", markup=False)

@@ -384,7 +384,8 @@ class WalkingResults:
             row["bench_stiffness_nm_per_rad"] = match and match["bench_stiffness_nm_per_rad"]
             row["error_percent"] = match and match["error_percent"]
             rows.append(_finite(row))
-        return rows
+        columns = dict.fromkeys(key for row in rows for key in row)  # the slope is per point
+        return [{key: row.get(key) for key in columns} for row in rows]
 
 
 def _finite(node: Any) -> Any:
