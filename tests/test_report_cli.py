@@ -74,8 +74,13 @@ def test_missing_figures_are_reported_not_fatal(identified, tmp_path):
     bare = tmp_path / "bare"
     bare.mkdir()
     (bare / "friction.json").write_bytes((identified / "friction.json").read_bytes())
-    path, missing = results_report(bare)
-    assert missing == [f"{stem}.png" for stem, _, _ in FRICTION_FIGURES]
+    path, notes = results_report(bare)
+    names = ", ".join(f"{stem}.png" for stem, _, _ in FRICTION_FIGURES)
+    assert notes == [
+        f"{bare}: no run.json (an older anklelab's output, or not anklelab's); its files cannot "
+        "be checked against the run that wrote them",
+        f"figures not found in {bare}: {names} (re-run the analysis with figures to include them)",
+    ]
     assert "Figures not found in the directory: spindown_fit.png" in path.read_text()
 
 
