@@ -59,7 +59,7 @@ def is_temporary(name: str) -> bool:
 
 _IN_TEXT = re.compile(
     r"(?<![^/\s'\"])\.(?P<name>[^/\s]+?)\.anklelab-[0-9a-f]{6}-\d{1,10}-[0-9a-f]{8}\.tmp"
-    r"(?:\.[A-Za-z0-9]{1,10}\b)?"
+    r"(?:\.[A-Za-z0-9]{1,10}(?![\w-]))?"
 )
 
 
