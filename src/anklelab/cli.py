@@ -79,7 +79,7 @@ def _os_error(exc: OSError) -> str:
     """One line for an operating-system error: the path the user named, and what happened."""
     from anklelab._atomic import untemporary
 
-    reason = exc.strerror or str(exc)
+    reason = untemporary(" ".join((exc.strerror or str(exc)).split()))
     where = f"{untemporary(str(exc.filename))}: " if exc.filename else ""
     hint = {
         errno.ENOSPC: "; nothing was written, free some space",

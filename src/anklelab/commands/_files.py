@@ -16,9 +16,10 @@ Then:
 
 from __future__ import annotations
 
+import errno
 import os
 import stat
-from collections.abc import Iterator, Sequence
+from collections.abc import Iterator, Mapping, Sequence
 from contextlib import contextmanager, suppress
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -29,7 +30,7 @@ from anklelab._lock import output_lock
 from anklelab._runs import RUN_FILE, RunManifest, sha256_file, write_run_manifest
 from anklelab.errors import AnklelabError, OutputError, ParameterError, ResultsFormatError
 
-__all__ = ["Run", "check_input", "output_directory", "output_file"]
+__all__ = ["Run", "array_bytes", "check_input", "check_space", "output_directory", "output_file"]
 
 MIN_FREE_BYTES = 64 << 10
 """Below this many free bytes a file system counts as full before anything is written."""
@@ -111,6 +112,58 @@ def _check_writable(path: Path) -> None:
         raise OutputError(f"{path}: cannot be written: no space left on device ({free} bytes free)")
 
 
+def array_bytes(*trees: Any) -> int:
+    """Bytes of every NumPy array in nested mappings, sequences and objects with ``columns``.
+
+    A lower bound of what a session takes on disk, to check for space before writing it.
+    """
+    import numpy as np
+
+    total, stack = 0, list(trees)
+    while stack:
+        node = stack.pop()
+        if isinstance(node, np.ndarray):
+            total += node.nbytes
+        elif isinstance(node, Mapping):
+            stack += node.values()
+        elif isinstance(node, list | tuple):
+            stack += node
+        elif hasattr(node, "recording"):
+            stack.append(node.recording)
+        elif hasattr(node, "columns"):
+            stack.append(node.columns)
+    return total
+
+
+def check_space(path: Path, needed: int) -> None:
+    """Refuse before writing when the file system of ``path`` has less than ``needed`` bytes.
+
+    Some writers (HDF5) cannot fail cleanly when the disk fills up under them.
+    """
+    fs = os.statvfs(_existing_ancestor(path))
+    free = fs.f_bavail * fs.f_frsize
+    if free < needed:
+        raise OutputError(
+            f"{path}: no space left on device: it needs about {needed / 1e6:.3g} MB, "
+            f"{free / 1e6:.3g} MB are free; nothing was written"
+        )
+
+
+_WRITE_ERRORS = (errno.ENOSPC, errno.EDQUOT, errno.EROFS, errno.EFBIG)
+
+
+@contextmanager
+def _name_write_errors(path: Path) -> Iterator[None]:
+    """A write error that names no file (a failed flush) is attributed to the output."""
+    try:
+        yield
+    except OSError as exc:
+        if exc.filename or exc.errno not in _WRITE_ERRORS or isinstance(exc, AnklelabError):
+            raise
+        reason = os.strerror(exc.errno or 0)
+        raise OSError(exc.errno, reason, str(path)) from None
+
+
 def _check_output(
     path: Path, kind: Literal["file", "directory"], inputs: Sequence[Path], option: str
 ) -> Path:
@@ -162,7 +215,7 @@ def output_file(
     naming the option and the path when it cannot be written as asked.
     """
     _check_output(path, "file", inputs, option)
-    with _parents(path), output_lock(path):
+    with _parents(path), output_lock(path), _name_write_errors(path):
         _refuse_existing(path, force, option)
         reap_temporaries(path.parent)
         yield path
@@ -253,7 +306,7 @@ def output_directory(
         Write into ``run.directory``; fill in ``run.settings`` and ``run.add_input``.
     """
     _check_output(path, "directory", inputs, option)
-    with _parents(path), output_lock(path):
+    with _parents(path), output_lock(path), _name_write_errors(path):
         if not (path.is_dir() and next(path.iterdir(), None) is None):
             _refuse_existing(path, force, option)
         _refuse_other_kind(path, command, writes_session)

@@ -23,12 +23,13 @@ def import_session(
     force: ForceOption = False,
 ) -> None:
     """Validate a session and write it as one native HDF5 file (atomically)."""
-    from anklelab.commands._files import output_file
+    from anklelab.commands._files import array_bytes, check_space, output_file
     from anklelab.data import load_session, save_session
 
     session_input(source)
     with output_file(out, force=force, inputs=[source]), recording_progress() as task:
         session = load_session(source, progress=task(f"reading {source.name}"))
+        check_space(out, array_bytes(session.calibration, session.walking, session.bench))
         save_session(
             session, out, format="h5", overwrite=force, progress=task(f"writing {out.name}")
         )

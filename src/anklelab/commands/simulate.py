@@ -141,7 +141,7 @@ def perturberator(
     """
     from contextlib import ExitStack
 
-    from anklelab.commands._files import output_directory, output_file
+    from anklelab.commands._files import array_bytes, check_space, output_directory, output_file
     from anklelab.commands._progress import recording_progress
     from anklelab.data import save_session
     from anklelab.experiments.perturberator import simulate_perturberator
@@ -174,6 +174,7 @@ def perturberator(
             artefacts=not no_artefacts,
             progress=task("simulating trials"),
         )
+        check_space(out, array_bytes(session.calibration, session.walking, session.truth))
         save_session(
             session,
             target,
