@@ -108,7 +108,7 @@ def _check(model: type[_Model], document: dict[str, Any], path: Path) -> dict[st
         loc = error["loc"]
         if error["type"] == "missing":
             raise ResultsFormatError(f"{path}: {_where(loc)}: required key is missing") from None
-        expected = error["msg"].removeprefix("Input should be ").rstrip(".")
+        expected = error["msg"].removeprefix("Input should be ").replace("a valid ", "a ")
         raise ResultsFormatError(
             f"{path}: {_where(loc)}: expected {expected}, got {error.get('input')!r:.40}"
         ) from None
