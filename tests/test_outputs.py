@@ -17,7 +17,7 @@ from anklelab._atomic import (
     untemporary,
     write_text_atomic,
 )
-from anklelab._lock import lock_path, output_lock
+from anklelab._lock import lock_path, output_lock, reap_locks
 from anklelab._runs import RUN_FILE, NotEmbeddable, RunManifest, read_inside, write_run_manifest
 from anklelab.errors import OutputError, ResultsFormatError
 
@@ -191,3 +191,11 @@ def test_malformed_run_manifest_is_an_error_naming_it(tmp_path, content, message
     (tmp_path / RUN_FILE).write_text(content)
     with pytest.raises(ResultsFormatError, match=message):
         RunManifest.load(tmp_path)
+
+
+def test_stale_lock_files_are_reaped_but_held_ones_kept(tmp_path):
+    stale = lock_path(tmp_path / "old")
+    stale.write_text("12345\n")  # its writer was killed: nobody holds it
+    with output_lock(tmp_path / "busy") as held:
+        assert reap_locks(tmp_path) == [stale]
+        assert held.exists() and not stale.exists()

@@ -3,7 +3,7 @@
 The lock is ``fcntl.flock`` on a hidden file beside the output (``.NAME.anklelab.lock``) holding
 the owner's process id. The kernel releases it when the process ends, however it ends, so a
 killed writer never leaves the output locked; the file itself is removed by its owner on release
-(and by the next owner after a ``kill -9``).
+(and, after a ``kill -9``, by the next writer beside it: :func:`reap_locks`).
 """
 
 from __future__ import annotations
@@ -16,7 +16,9 @@ from pathlib import Path
 
 from anklelab.errors import OutputError
 
-__all__ = ["lock_path", "output_lock"]
+__all__ = ["lock_path", "output_lock", "reap_locks"]
+
+_SUFFIX = ".anklelab.lock"
 
 
 def lock_path(target: str | os.PathLike[str]) -> Path:
@@ -26,7 +28,7 @@ def lock_path(target: str | os.PathLike[str]) -> Path:
     PosixPath('runs/.out.anklelab.lock')
     """
     target = Path(target)
-    return target.parent / f".{target.name[:200]}.anklelab.lock"
+    return target.parent / f".{target.name[:200]}{_SUFFIX}"
 
 
 def _holder(fd: int) -> str:
@@ -77,3 +79,27 @@ def output_lock(target: str | os.PathLike[str]) -> Iterator[Path]:
         with suppress(OSError):
             os.unlink(lock)
         os.close(fd)
+
+
+def reap_locks(directory: str | os.PathLike[str]) -> list[Path]:
+    """Remove the lock files in ``directory`` that no process holds (left by a killed writer).
+
+    Each is removed while locked, so a writer that opened it meanwhile notices (its file is no
+    longer the one at the path) and starts over. Returns the paths removed.
+    """
+    removed = []
+    for lock in Path(directory).glob(f".*{_SUFFIX}"):
+        try:
+            fd = os.open(lock, os.O_RDWR | os.O_CLOEXEC)
+        except OSError:
+            continue
+        try:
+            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+            if os.path.samestat(os.fstat(fd), os.stat(lock)):
+                os.unlink(lock)
+                removed.append(lock)
+        except OSError:  # held by a live writer, or gone already
+            pass
+        finally:
+            os.close(fd)
+    return removed

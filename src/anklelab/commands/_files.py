@@ -26,7 +26,7 @@ from pathlib import Path
 from typing import Any, Literal
 
 from anklelab._atomic import atomic_directory, reap_temporaries
-from anklelab._lock import output_lock
+from anklelab._lock import output_lock, reap_locks
 from anklelab._runs import RUN_FILE, RunManifest, sha256_file, write_run_manifest
 from anklelab.errors import AnklelabError, OutputError, ParameterError, ResultsFormatError
 
@@ -218,6 +218,7 @@ def output_file(
     with _parents(path), output_lock(path), _name_write_errors(path):
         _refuse_existing(path, force, option)
         reap_temporaries(path.parent)
+        reap_locks(path.parent)
         yield path
 
 
@@ -310,6 +311,7 @@ def output_directory(
         if not (path.is_dir() and next(path.iterdir(), None) is None):
             _refuse_existing(path, force, option)
         _refuse_other_kind(path, command, writes_session)
+        reap_locks(path.parent)
         with atomic_directory(path, overwrite=True, marker=RUN_FILE) as staging:
             run = Run(staging)
             yield run
