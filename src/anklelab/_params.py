@@ -188,11 +188,12 @@ def _read_text(path: Path, what: str) -> str:
         raise ParameterError(f"{path}: {what} not found") from None
     except OSError as exc:
         raise ParameterError(f"{path}: cannot read the {what}: {exc.strerror}") from None
+    mode = os.fstat(fd).st_mode
+    if not stat.S_ISREG(mode):
+        os.close(fd)
+        kind = "a directory" if stat.S_ISDIR(mode) else "not a regular file"
+        raise ParameterError(f"{path}: {kind}; expected a {what}")
     with os.fdopen(fd, "rb") as f:
-        mode = os.fstat(f.fileno()).st_mode
-        if not stat.S_ISREG(mode):
-            kind = "a directory" if stat.S_ISDIR(mode) else "not a regular file"
-            raise ParameterError(f"{path}: {kind}; expected a {what}")
         data = f.read(_MAX_DOCUMENT_BYTES + 1)
     if len(data) > _MAX_DOCUMENT_BYTES:
         raise ParameterError(f"{path}: larger than {_MAX_DOCUMENT_BYTES >> 20} MiB; not a {what}")

@@ -105,12 +105,13 @@ def read_inside(directory: str | os.PathLike[str], name: str, *, limit: int) -> 
     except OSError as exc:
         kind = "a symbolic link" if os.path.islink(path) else exc.strerror
         raise NotEmbeddable(f"{path}: {kind}; expected a regular file") from None
-    with os.fdopen(fd, "rb") as f:
-        info = os.fstat(f.fileno())
+    info = os.fstat(fd)
+    if not stat.S_ISREG(info.st_mode) or info.st_size > limit:
+        os.close(fd)
         if not stat.S_ISREG(info.st_mode):
             raise NotEmbeddable(f"{path}: not a regular file")
-        if info.st_size > limit:
-            raise NotEmbeddable(f"{path}: {info.st_size} bytes; more than the {limit} expected")
+        raise NotEmbeddable(f"{path}: {info.st_size} bytes; more than the {limit} expected")
+    with os.fdopen(fd, "rb") as f:
         data = f.read(limit + 1)
     if len(data) > limit:
         raise NotEmbeddable(f"{path}: more than the {limit} bytes expected")

@@ -3,11 +3,12 @@
 from __future__ import annotations
 
 import errno
+import functools
 import os
 import signal
 import sys
 import threading
-from typing import Annotated
+from typing import Annotated, Any
 
 import typer
 
@@ -90,6 +91,12 @@ def _os_error(exc: OSError) -> str:
     return f"{where}{reason}{hint}"
 
 
+@functools.cache
+def _command() -> Any:
+    """The click command of ``app``, built once per process (typer builds it on every call)."""
+    return typer.main.get_command(app)
+
+
 def _click_error() -> type[Exception]:
     """click's base exception (recent typer versions vendor click)."""
     return next(c for c in typer.BadParameter.__mro__ if c.__name__ == "ClickException")
@@ -117,7 +124,7 @@ def run() -> None:
         handlers = {number: signal.signal(number, _interrupt) for number in _SIGNALS}
     code: object = 0
     try:
-        code = app(standalone_mode=False)
+        code = _command().main(prog_name="anklelab", standalone_mode=False)
     except _Interrupted as exc:
         name = signal.Signals(exc.signum).name
         typer.echo(f"error: interrupted by {name}; unfinished outputs were removed", err=True)
