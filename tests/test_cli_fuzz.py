@@ -42,7 +42,7 @@ class World:
     ident: Path  # a capstan identification directory
     results: Path  # a results directory `report` accepts
     filters: dict = field(repr=False)  # a valid platform-filter document
-    scratch: Path = Path()  # where each example makes its files
+    scratch: Path  # where each example makes its files
 
     def fresh(self) -> Path:
         return Path(tempfile.mkdtemp(dir=self.scratch))
