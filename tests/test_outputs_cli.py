@@ -5,8 +5,10 @@ import errno
 import json
 import os
 import shutil
+import signal
 import subprocess
 import sys
+import time
 
 import pytest
 
@@ -376,3 +378,30 @@ def test_hdf5_writer_fails_cleanly_on_a_full_disk(big_session):
     if proc is None:
         pytest.skip("no private mount namespace here (unshare -rm)")
     assert proc.stdout.split() == ["OSError", "28", "rc=0"] and proc.stderr == ""
+
+
+# --- interrupted runs ---------------------------------------------------------------------
+
+
+@pytest.mark.parametrize("number", [signal.SIGTERM, signal.SIGINT])
+def test_an_interrupted_run_removes_its_temporaries(tmp_path, number):
+    """SIGTERM or SIGINT while the output is being built: one line, nothing left behind."""
+    from anklelab._atomic import is_temporary
+
+    out = tmp_path / "twin"
+    args = ["simulate", "perturberator", "--out", out, "--format", "dir"]
+    args += ["--trials-per-point", "5", "--unperturbed", "5"]
+    code = "from anklelab.cli import run; run()"
+    proc = subprocess.Popen(
+        [sys.executable, "-c", code, *map(str, args)], stderr=subprocess.PIPE, text=True
+    )
+    while proc.poll() is None and not any(is_temporary(p.name) for p in tmp_path.iterdir()):
+        time.sleep(0.02)
+    proc.send_signal(number)
+    _, err = proc.communicate(timeout=300)
+    assert proc.returncode == 128 + number
+    name = signal.Signals(number).name
+    assert err.strip().splitlines()[-1] == (
+        f"error: interrupted by {name}; unfinished outputs were removed"
+    )
+    assert "Traceback" not in err and list(tmp_path.iterdir()) == []

@@ -120,9 +120,14 @@ def perturberator(
             "--params", help="A perturberator parameter file to use instead of the shipped."
         ),
     ] = None,
-    no_artefacts: Annotated[
-        bool, typer.Option("--no-artefacts", help="Ideal sensors and nominal gait.")
-    ] = False,
+    artefacts: Annotated[
+        bool,
+        typer.Option(
+            "--artefacts/--no-artefacts",
+            help="Measurement artefacts and gait variability; --no-artefacts: ideal sensors "
+            "and nominal gait.",
+        ),
+    ] = True,
     bench: Annotated[
         bool | None,
         typer.Option(
@@ -171,7 +176,7 @@ def perturberator(
             trials_per_point=trials_per_point,
             n_unperturbed=unperturbed,
             bench=bench,
-            artefacts=not no_artefacts,
+            artefacts=artefacts,
             progress=task("simulating trials"),
         )
         check_space(out, array_bytes(session.calibration, session.walking, session.truth))
@@ -188,7 +193,7 @@ def perturberator(
                 foot=foot.value,
                 trials_per_point=trials_per_point,
                 unperturbed=unperturbed,
-                artefacts=not no_artefacts,
+                artefacts=artefacts,
                 bench=bench,
             )
             run.add_input(params)
