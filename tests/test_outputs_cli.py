@@ -384,13 +384,11 @@ def test_hdf5_writer_fails_cleanly_on_a_full_disk(big_session):
 
 
 @pytest.mark.parametrize("number", [signal.SIGTERM, signal.SIGINT])
-def test_an_interrupted_run_removes_its_temporaries(tmp_path, number):
+def test_an_interrupted_run_removes_its_temporaries(twin, tmp_path, number):
     """SIGTERM or SIGINT while the output is being built: one line, nothing left behind."""
     from anklelab._atomic import is_temporary
 
-    out = tmp_path / "twin"
-    args = ["simulate", "perturberator", "--out", out, "--format", "dir"]
-    args += ["--trials-per-point", "5", "--unperturbed", "5"]
+    args = ["analyze", twin[0], "--out", tmp_path / "o", "--settings", twin[1]]
     code = "from anklelab.cli import run; run()"
     proc = subprocess.Popen(
         [sys.executable, "-c", code, *map(str, args)], stderr=subprocess.PIPE, text=True
