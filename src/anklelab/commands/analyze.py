@@ -17,7 +17,12 @@ from rich.console import Console
 from rich.table import Table
 
 from anklelab._atomic import write_text_atomic
-from anklelab.commands._options import SessionArgument, SettingsOption
+from anklelab.commands._options import (
+    ForceOption,
+    SessionArgument,
+    SettingsOption,
+    session_input,
+)
 from anklelab.commands._progress import recording_progress
 
 if TYPE_CHECKING:
@@ -117,25 +122,34 @@ def analyze(
         ),
     ] = None,
     seed: Annotated[
-        int | None, typer.Option(help="Bootstrap seed (overrides the settings).")
+        int | None, typer.Option(min=0, help="Bootstrap seed (overrides the settings).")
     ] = None,
     figures: Annotated[
         bool, typer.Option("--figures/--no-figures", help="Write PNG figures.")
     ] = True,
+    force: ForceOption = False,
 ) -> None:
     """Ankle stiffness, damping and inertia per timing point and direction, with bootstrap.
 
-    Writes OUT/results.json (DESIGN.md section 5), OUT/results.csv (one row per timing point and
-    direction), OUT/trials.csv (detections and drop reasons per trial) and OUT/*.png figures.
+    Writes OUT/results.json (see the result-files guide), OUT/results.csv (one row per timing
+    point and direction), OUT/trials.csv (detections and drop reasons per trial), OUT/*.png
+    figures and OUT/run.json (the record of the run: settings, input hashes, files written).
+    OUT is written whole or not at all.
     """
+    from anklelab.commands._files import output_directory
     from anklelab.data import load_session, session_hash
     from anklelab.errors import AnklelabWarning
     from anklelab.ident.irf import PlatformFilters
     from anklelab.pipelines.walking import STEPS, analyze_walking, load_walking_settings
 
+    session_input(session_path)
     settings = load_walking_settings(settings_file, seed=seed)
     filters = PlatformFilters.load(filters_file) if filters_file else None
-    with recording_progress() as task:
+    inputs = [p for p in (session_path, settings_file, filters_file) if p is not None]
+    with (
+        output_directory(out, command="analyze", force=force, inputs=inputs) as run,
+        recording_progress() as task,
+    ):
         session = load_session(session_path, progress=task(f"reading {session_path.name}"))
         step = task("analysing")
         total = len(STEPS) + 1 + figures
@@ -149,17 +163,19 @@ def analyze(
                 progress=lambda name: step(names.index(name), total),
             )
         step(len(STEPS), total)
-        out.mkdir(parents=True, exist_ok=True)
-        document = results.to_dict(
-            session=Path(session_path).name, session_sha256=session_hash(session_path)
-        )
-        write_text_atomic(out / "results.json", json.dumps(document, indent=2))
-        write_csv(out / "results.csv", results.table())
-        write_csv(out / "trials.csv", trials_table(session, results))
+        sha256 = session_hash(session_path)
+        document = results.to_dict(session=Path(session_path).name, session_sha256=sha256)
+        write_text_atomic(run.directory / "results.json", json.dumps(document, indent=2))
+        write_csv(run.directory / "results.csv", results.table())
+        write_csv(run.directory / "trials.csv", trials_table(session, results))
         if figures:
             from anklelab.report.figures_walking import save_walking_figures
 
-            save_walking_figures(results, out)
+            save_walking_figures(results, run.directory)
+        run.settings.update(settings.model_dump(mode="json"), figures=figures)
+        run.add_input(session_path, sha256)
+        run.add_input(settings_file)
+        run.add_input(filters_file)
         step(total, total)
     console = Console()
     if not console.is_terminal:  # a log or a pipe: never fold the table's rows
