@@ -229,10 +229,15 @@ def _subject(rng: np.random.Generator, p: PerturberatorParameters) -> dict[str, 
     fractions = (0.0, rest, *g.cop_knots_fraction[2:])
     metres = (start, heel, *(scale * m for m in g.cop_knots_m[2:]))
     variability = {
-        f"gait.{name}": _scaled(rng, getattr(g, name), 0.5, 2.0)
-        for name in ("stance_sd_fraction", "force_sd_fraction", "cop_sd_fraction")
+        "gait.stance_sd_fraction": _scaled(rng, g.stance_sd_fraction, 0.5, 1.5),
+        **{
+            f"gait.{name}": _scaled(rng, getattr(g, name), 0.5, 2.0)
+            for name in ("force_sd_fraction", "cop_sd_fraction")
+        },
     }
-    stance = float(rng.uniform(0.72, 0.90))
+    # the last window (475 ms + 100 ms, plus the onset latency) ends before heel-off even in a
+    # stance 2 sd short: 0.78 s x 0.88 x (1 - 2 x 0.03) = 0.645 s
+    stance = float(rng.uniform(0.78, 0.92))
     longest = stance * (1 + 3 * variability["gait.stance_sd_fraction"])
     duration = g.pre_contact_s + g.pre_contact_jitter_s + longest + 0.05  # covers every stance
     return variability | {

@@ -339,7 +339,11 @@ def epoch(
     reason = f"window {tmin:g} .. {tmax:g} s leaves the recording"
     log = [r or ((reason,) if out else ()) for r, out in zip(log, outside, strict=True)]
     kept = np.flatnonzero([not r for r in log])
-    index = events[kept, None] + offsets
-    cut = data[kept[:, None, None], np.arange(data.shape[1])[:, None], index[:, None, :]]
+    if kept.size and np.all(events[kept] == events[kept[0]]):  # one window for all: a slice
+        start = events[kept[0]] + offsets[0]
+        cut = data[kept, :, start : start + offsets.size]
+    else:
+        index = events[kept, None] + offsets
+        cut = data[kept[:, None, None], np.arange(data.shape[1])[:, None], index[:, None, :]]
     meta = {key: np.asarray(value)[kept] for key, value in (metadata or {}).items()}
     return Trials(cut, fs, ch_names, meta, tmin=offsets[0] / fs, drop_log=log, selection=kept)

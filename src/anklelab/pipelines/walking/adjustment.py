@@ -63,7 +63,7 @@ class Adjustment:
     def predict(self, features: NDArray[np.float64]) -> NDArray[np.float64]:
         """Predicted departures, shape ``(n_trials, n_channels, n_times)``."""
         clipped = np.clip(features, self.bounds[0], self.bounds[1])
-        return np.einsum("nf,cft->nct", clipped / self.scale, self.coef)
+        return np.tensordot(clipped / self.scale, self.coef, axes=(1, 1))  # (n, c, t)
 
 
 def pre_onset_features(
@@ -141,7 +141,7 @@ def fit_adjustment(features: NDArray[np.float64], targets: NDArray[np.float64]) 
     u, s, vt = np.linalg.svd(features / scale, full_matrices=False)
     keep = s > _RANK_TOLERANCE * np.sqrt(n)  # standardised features: s ~ sqrt(n) when informative
     u, s, vt = u[:, keep], s[keep], vt[keep]
-    uty = np.einsum("nk,nct->ckt", u, targets)  # (n_channels, n_directions, n_times)
+    uty = np.tensordot(u, targets, axes=(0, 0)).swapaxes(0, 1)  # (channels, directions, times)
     total = (targets**2).sum(axis=(0, 2))
     projected = (uty**2).sum(axis=2)  # (n_channels, n_directions)
     penalties = np.array(_PENALTIES)
@@ -153,7 +153,7 @@ def fit_adjustment(features: NDArray[np.float64], targets: NDArray[np.float64]) 
     gcv = residual / n / (1 - shrink.sum(axis=1, keepdims=True) / n) ** 2
     best = np.where(total > 0, gcv.argmin(axis=0), len(penalties) - 1)  # nothing to explain
     chosen = shrink[best]  # (n_channels, n_directions)
-    coef = np.einsum("fk,ck,ckt->cft", vt.T, chosen / s, uty)
+    coef = (vt.T[None] * (chosen / s)[:, None, :]) @ uty  # (channels, features, times)
     with np.errstate(invalid="ignore", divide="ignore"):
         explained = np.clip(1.0 - gcv[best, np.arange(len(best))] * n / total, 0.0, 1.0)
     bounds = np.stack([features.min(axis=0), features.max(axis=0)])

@@ -44,7 +44,6 @@ KINEMATICS = ("angle", "velocity", "acceleration")
 _KIN = [RESPONSE.index(name) for name in KINEMATICS]
 _TORQUE = RESPONSE.index("torque")
 _FULL = 0  # row of the all-trial average among the stacked averages
-_Z975 = 1.959963984540054  # the standard normal's 97.5 % quantile
 
 
 def condition_order(stance: Trials) -> list[str]:
@@ -70,6 +69,16 @@ def _fit(averages: NDArray[np.float64], lengths: list[int], model: str, fs: floa
     )
 
 
+def _window_stiffness(
+    average: NDArray[np.float64], windows: tuple[float, ...], lengths: list[int], model: str, fs: float
+) -> dict[str, float]:
+    """The all-trial stiffness over each sensitivity window (``windows[1:]``, ms)."""
+    if len(windows) < 2:
+        return {}
+    stiffness = _fit(average, lengths[1:], model, fs).stiffness[:, 0]
+    return {f"{w:g}": float(k) for w, k in zip(windows[1:], stiffness, strict=True)}
+
+
 def _focused_choice(constant: NDArray[np.float64], linear: NDArray[np.float64]) -> str:
     """The model whose stiffness has the smaller estimated mean squared error.
 
@@ -83,17 +92,17 @@ def _focused_choice(constant: NDArray[np.float64], linear: NDArray[np.float64]) 
 def _estimate(values: NDArray[np.float64], n_reps: int, paper: slice, n_trials: int) -> Estimate:
     """An :class:`Estimate` from stacked values: all-trial, ``n_reps`` resamples, paper subsets.
 
-    The interval is the resamples' 2.5-97.5 percentile range about the all-trial value, widened
-    for small samples by ``t(n-1) / z × sqrt(n / (n-1))`` (``n`` perturbed trials): a resample
-    of few trials underestimates the spread of their mean (by ``(n-1)/n`` in variance) and its
-    tails are Student's, not normal (1.58× for 5 trials, 1.04× for 50).
+    The interval is the all-trial value ± ``t(n-1, 0.975) × sqrt(n / (n-1)) × s``, ``s`` the
+    resamples' sd and ``n`` the perturbed trials: a resample of few trials underestimates the
+    spread of their mean (by ``(n-1)/n`` in variance) and the tails are Student's, not normal
+    (1.58× the normal interval for 5 trials, 1.04× for 50). An sd settles with far fewer
+    resamples than the 2.5 and 97.5 percentiles do.
     """
     centre, resampled, subsets = float(values[_FULL]), values[1 : 1 + n_reps], values[paper]
     if n_reps < 2 or n_trials < 2:
         return Estimate(centre, sd(subsets), (np.nan, np.nan), subsets)
-    widen = stdtrit(n_trials - 1, 0.975) / _Z975 * np.sqrt(n_trials / (n_trials - 1))
-    low, high = centre + widen * (np.percentile(resampled, [2.5, 97.5]) - centre)
-    return Estimate(centre, sd(subsets), (float(low), float(high)), subsets)
+    half = stdtrit(n_trials - 1, 0.975) * np.sqrt(n_trials / (n_trials - 1)) * sd(resampled)
+    return Estimate(centre, sd(subsets), (centre - half, centre + half), subsets)
 
 
 def estimate_timing_point(
@@ -136,8 +145,9 @@ def estimate_timing_point(
         ]
     )
     paper = slice(1 + reps, None)
-    constant = _fit(averages, lengths, "constant", fs)
-    linear = _fit(averages, lengths, "linear", fs)
+    main = averages[..., :n]  # every resample fits the analysis window only
+    constant = _fit(main, [n], "constant", fs)
+    linear = _fit(main, [n], "linear", fs)
     model = settings.stiffness_model
     if model == "auto":
         model = _focused_choice(constant.stiffness[0], linear.stiffness[0])
@@ -172,10 +182,7 @@ def estimate_timing_point(
             if model == "linear"
             else None
         ),
-        window_stiffness={
-            f"{w:g}": float(k[_FULL])
-            for w, k in zip(windows[1:], chosen.stiffness[1:], strict=True)
-        },
+        window_stiffness=_window_stiffness(averages[_FULL : _FULL + 1], windows, lengths, model, fs),
         adjustment_explained=responses.explained,
         warnings=warnings,
         onset_ms=trials.metadata["onset_ms"],

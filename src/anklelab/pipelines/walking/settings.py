@@ -26,10 +26,12 @@ class WalkingSettings(Parameters):
         Samples per local quadratic fit for derivatives (paper 000: the point and 4 around it).
     heel_contact_threshold_n, heel_contact_hold_ms
         Vertical force that marks heel contact (paper 000: 25 N) and how long it must hold.
-    contact_cop_ms
-        The COP at heel contact (where the COP is zeroed) is read from a line fitted to the
-        unfiltered COP over this span from the contact sample, at the instant the force crosses
-        the threshold (short, so that a COP rolling fast after heel strike is followed).
+    contact_cop_ms, contact_cop_degree
+        The COP at heel contact (where the COP is zeroed) is a polynomial of this degree in time
+        fitted to the unfiltered COP over this span from the contact sample, weighted by the
+        squared vertical force, and read at the instant the force crosses the threshold. The
+        early COP path's shape differs between feet and plates: no span and degree fits every
+        one to 1 mm (see the walking-analysis guide for the measured spread).
     baseline_ms
         Unloaded span at the start of each walking file used to zero channels and motor angle.
     onset_min_amplitude_rad
@@ -87,7 +89,7 @@ class WalkingSettings(Parameters):
     derivative_window: int = Field(5, ge=3)
     heel_contact_threshold_n: float = Field(25.0, gt=0)
     heel_contact_hold_ms: float = Field(5.0, ge=0)
-    contact_cop_ms: float = Field(5.0, gt=0)
+    contact_cop_ms: float = Field(20.0, gt=0)
     contact_cop_degree: int = Field(1, ge=0, le=5)
     baseline_ms: float = Field(50.0, gt=0)
     onset_min_amplitude_rad: float = Field(0.005, gt=0)
@@ -108,7 +110,7 @@ class WalkingSettings(Parameters):
     adjustment_guard_ms: float = Field(5.0, ge=0)
     adjustment_bins: int = Field(5, ge=1, le=50)
     outlier_mads: float = Field(25.0, gt=3)
-    interval_reps: int = Field(400, ge=20, le=20_000)
+    interval_reps: int = Field(200, ge=20, le=20_000)
     change_threshold: float = Field(0.2, gt=0)
     bootstrap_reps: int = Field(100, ge=1, le=20_000)
     bootstrap_fraction: float = Field(0.6, gt=0, le=1)

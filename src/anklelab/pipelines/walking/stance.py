@@ -163,7 +163,7 @@ def stance_trials(
     signals -= signals[..., :n_base].mean(axis=-1, keepdims=True)
     motor, ankle_raw = signals[:, 0], signals[:, 1]
     sagittal = sagittal_matrix(plate)
-    load_raw = np.einsum("sc,nct->nst", sagittal, signals[:, 2:])  # grf_x, grf_z, grf_z * cop_x
+    load_raw = sagittal @ signals[:, 2:]  # grf_x, grf_z, grf_z * cop_x
     contact = heel_contact(
         load_raw[:, 1],
         fs,
@@ -248,7 +248,11 @@ def stance_trials(
         "grf_z_raw": grf_z_raw,
         "angle_raw": ankle_raw - ankle[rows, event][:, None],
     }
-    data = np.stack([channels_by_name[name] for name in STANCE_CHANNELS], axis=1)
+    window = np.minimum(event[:, None] + np.arange(max(span, 1)), raw.shape[-1] - 1)
+    data = np.stack(  # only the analysed stance of each channel is copied
+        [np.take_along_axis(channels_by_name[name], window, axis=-1) for name in STANCE_CHANNELS],
+        axis=1,
+    )
     time0 = np.array([w.recording.time_s[0] for w in walking])
     metadata = {
         "condition": np.array([condition(w) for w in walking]),
@@ -262,18 +266,19 @@ def stance_trials(
     stance = epoch(
         data,
         fs,
-        event,
+        np.zeros_like(event),
         0.0,
         (span - 1) / fs,
         ch_names=STANCE_CHANNELS,
         metadata=metadata,
-        lengths=lengths,
+        lengths=lengths - event,
         drop_log=log,
     )
-    stance = stance.drop(
-        ~np.isfinite(stance.data).all(axis=(1, 2)),
-        "vertical force below 1 N within the analysed stance (COP undefined)",
-    )
+    undefined = ~np.isfinite(stance.data).all(axis=(1, 2))
+    if undefined.any():
+        stance = stance.drop(
+            undefined, "vertical force below 1 N within the analysed stance (COP undefined)"
+        )
     return stance, mislabelled
 
 
