@@ -236,11 +236,16 @@ def _distribution_lines(group: Sequence[dict[str, Any]]) -> list[str]:
             flagged = column(f"{name}_flagged", subset).astype(bool)
             shown = np.abs(err[~flagged]) if flagged.size == err.size else np.abs(err)
             covered = column(f"{name}_covered", subset)
+            if covered.size == flagged.size and (~flagged).any():
+                covered = covered[~flagged]  # the criterion: covered, or flagged
             cover = f"coverage {100 * covered.mean():5.1f} %" if covered.size else "no ci95"
+            half = 50 * (column(f"{name}_high", subset) - column(f"{name}_low", subset))
+            half /= np.abs(column(name, subset))
             out.append(
                 f"  {label:11s} {name:9s} |err| median {np.median(shown):6.2f} p95 "
                 f"{np.percentile(shown, 95):6.2f} max {shown.max():7.2f} %  bias "
-                f"{np.mean(err):+6.2f} %  flagged {flagged.mean():5.1%}  {cover}"
+                f"{np.mean(err):+6.2f} %  flagged {flagged.mean():5.1%}  {cover} of unflagged"
+                f"  ci half-width median {np.nanmedian(half):5.1f} %"
                 if shown.size
                 else f"  {label:11s} {name:9s} all flagged"
             )

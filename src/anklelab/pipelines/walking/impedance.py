@@ -26,6 +26,8 @@ change within the window when that interval lies wholly beyond ``change_threshol
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 from numpy.typing import NDArray
 from scipy.special import stdtrit
@@ -70,7 +72,11 @@ def _fit(averages: NDArray[np.float64], lengths: list[int], model: str, fs: floa
 
 
 def _window_stiffness(
-    average: NDArray[np.float64], windows: tuple[float, ...], lengths: list[int], model: str, fs: float
+    average: NDArray[np.float64],
+    windows: tuple[float, ...],
+    lengths: list[int],
+    model: str,
+    fs: float,
 ) -> dict[str, float]:
     """The all-trial stiffness over each sensitivity window (``windows[1:]``, ms)."""
     if len(windows) < 2:
@@ -89,19 +95,68 @@ def _focused_choice(constant: NDArray[np.float64], linear: NDArray[np.float64]) 
     return "linear" if np.var(linear[1:], ddof=1) < mse_constant else "constant"
 
 
-def _estimate(values: NDArray[np.float64], n_reps: int, paper: slice, n_trials: int) -> Estimate:
+def _systematic(
+    average: NDArray[np.float64], lengths: list[int], model: str, shift: int, fs: float
+) -> dict[str, float]:
+    """How far each all-trial estimate moves under what the data cannot pin down.
+
+    The torque shifted by ``±shift`` samples against the kinematics (the timing between the
+    encoder and the plate's channels, anti-alias filters and converter skew included, is known
+    only to about a sample: ``θ(t - δ) ≈ θ - δ θ'`` moves damping by ``k δ`` and inertia by
+    ``b δ``), and, for damping and inertia, the sensitivity windows (a stiffness that changes
+    within the window leaks into them). The stiffness's change between windows is a real
+    change over time, not an error, and is left out.
+
+    Returns the largest absolute move per quantity (``stiffness``, ``damping``, ``inertia``).
+    """
+    n = lengths[0]
+    kin, torque = average[:, _KIN], average[:, _TORQUE]
+    variants = []
+    if shift and average.shape[-1] >= n + shift:
+        for lead in (shift, -shift):  # torque later / earlier than the kinematics
+            k0, t0 = (0, lead) if lead > 0 else (-lead, 0)
+            variants.append(
+                fit_impedance(
+                    kin[..., k0 : k0 + n],
+                    torque[..., t0 : t0 + n],
+                    stiffness_model=model,
+                    fs=fs,
+                )
+            )
+    centre = fit_impedance(kin[..., :n], torque[..., :n], stiffness_model=model, fs=fs)
+    if len(lengths) > 1:
+        windows = fit_impedance(kin, torque, lengths=lengths[1:], stiffness_model=model, fs=fs)
+    moves = {}
+    for name in ("stiffness", "damping", "inertia"):
+        values = [np.ravel(getattr(v, name)) for v in variants]
+        if len(lengths) > 1 and name != "stiffness":
+            values.append(np.ravel(getattr(windows, name)))
+        moved = np.abs(np.concatenate([np.empty(0), *values]) - np.ravel(getattr(centre, name)))
+        moves[name] = float(moved.max(initial=0.0))
+    return moves
+
+
+def _estimate(
+    values: NDArray[np.float64],
+    n_reps: int,
+    paper: slice,
+    n_trials: int,
+    systematic: float = 0.0,
+) -> Estimate:
     """An :class:`Estimate` from stacked values: all-trial, ``n_reps`` resamples, paper subsets.
 
     The interval is the all-trial value ± ``t(n-1, 0.975) × sqrt(n / (n-1)) × s``, ``s`` the
     resamples' sd and ``n`` the perturbed trials: a resample of few trials underestimates the
     spread of their mean (by ``(n-1)/n`` in variance) and the tails are Student's, not normal
     (1.58× the normal interval for 5 trials, 1.04× for 50). An sd settles with far fewer
-    resamples than the 2.5 and 97.5 percentiles do.
+    resamples than the 2.5 and 97.5 percentiles do. A ``systematic`` half-width (what the data
+    cannot pin down, :func:`_systematic`) is added in quadrature.
     """
     centre, resampled, subsets = float(values[_FULL]), values[1 : 1 + n_reps], values[paper]
     if n_reps < 2 or n_trials < 2:
         return Estimate(centre, sd(subsets), (np.nan, np.nan), subsets)
-    half = stdtrit(n_trials - 1, 0.975) * np.sqrt(n_trials / (n_trials - 1)) * sd(resampled)
+    random = stdtrit(n_trials - 1, 0.975) * np.sqrt(n_trials / (n_trials - 1)) * sd(resampled)
+    half = float(np.hypot(random, systematic))
     return Estimate(centre, sd(subsets), (centre - half, centre + half), subsets)
 
 
@@ -158,10 +213,16 @@ def estimate_timing_point(
     low, high = change_estimate.ci95
     threshold = settings.change_threshold
     changes = bool(low > threshold or high < -threshold)
+    shift = round(settings.timing_uncertainty_ms * fs / 1000.0)
+    systematic = _systematic(averages[_FULL : _FULL + 1], lengths, model, shift, fs)
     estimates = {
-        name: _estimate(getattr(chosen, name)[0], reps, paper, len(trials))
+        name: _estimate(
+            getattr(chosen, name)[0], reps, paper, len(trials), systematic.get(name, 0.0)
+        )
         for name in ("stiffness", "damping", "inertia", "vaf")
     }
+    vaf = estimates["vaf"]  # a VAF cannot exceed 100 %
+    estimates["vaf"] = replace(vaf, ci95=(vaf.ci95[0], min(vaf.ci95[1], 100.0)))
     analysis = ImpedanceFit(*(values[0][paper] for values in chosen))
     subset_avg = averages[paper]
     angle = trials.get_data("angle")[:, :n].mean(axis=0)
@@ -182,7 +243,9 @@ def estimate_timing_point(
             if model == "linear"
             else None
         ),
-        window_stiffness=_window_stiffness(averages[_FULL : _FULL + 1], windows, lengths, model, fs),
+        window_stiffness=_window_stiffness(
+            averages[_FULL : _FULL + 1], windows, lengths, model, fs
+        ),
         adjustment_explained=responses.explained,
         warnings=warnings,
         onset_ms=trials.metadata["onset_ms"],

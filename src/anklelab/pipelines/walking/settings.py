@@ -76,6 +76,10 @@ class WalkingSettings(Parameters):
         average).
     interval_reps
         Resamples behind each 95 % interval (``ci95``).
+    timing_uncertainty_ms
+        How well the timing between the angle and the plate's channels is known (anti-alias
+        filters, converter skew); the estimates' moves when the torque is shifted by this much
+        widen the intervals (damping moves by about ``k δ``, inertia by ``b δ``), ms.
     change_threshold
         The stiffness is reported as changing within the window when the interval of its
         change over the window (a fraction of it) lies wholly beyond this.
@@ -111,6 +115,7 @@ class WalkingSettings(Parameters):
     adjustment_bins: int = Field(5, ge=1, le=50)
     outlier_mads: float = Field(25.0, gt=3)
     interval_reps: int = Field(200, ge=20, le=20_000)
+    timing_uncertainty_ms: float = Field(1.0, ge=0)
     change_threshold: float = Field(0.2, gt=0)
     bootstrap_reps: int = Field(100, ge=1, le=20_000)
     bootstrap_fraction: float = Field(0.6, gt=0, le=1)
