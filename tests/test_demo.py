@@ -8,7 +8,7 @@ from typer.testing import CliRunner
 from anklelab import __version__
 from anklelab.cli import app
 from anklelab.data import load_session
-from anklelab.pipelines.demo import COMPENSATIONS, OBSERVER_TASKS, SETPOINTS_DEG, DemoSettings
+from anklelab.demo import COMPENSATIONS, OBSERVER_TASKS, SETPOINTS_DEG, DemoSettings
 from anklelab.report.sections import FRICTION_FIGURES, WALKING_FIGURES
 from tests.browser import view
 

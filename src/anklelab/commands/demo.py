@@ -15,14 +15,14 @@ from rich.table import Table
 from anklelab.commands._progress import recording_progress
 
 if TYPE_CHECKING:
-    from anklelab.report.comparisons import Comparison
+    from anklelab.demo.comparisons import Comparison
 
 __all__ = ["demo"]
 
 
 def _table(title: str, rows: Sequence[Comparison]) -> Table:
     """Rows under a bold heading per group; numbers never wrap."""
-    from anklelab.report.comparisons import COLUMNS, grouped
+    from anklelab.demo.comparisons import COLUMNS, grouped
 
     table = Table(title=title, box=box.SIMPLE_HEAD, title_justify="left", title_style="bold")
     for k, column in enumerate(COLUMNS):
@@ -54,8 +54,7 @@ def demo(
     Writes OUT/ (sessions, results.json, friction.json, summary.json, report.html) and prints,
     per paper, what the paper reported, what anklelab measured and the twin's truth.
     """
-    from anklelab.pipelines.demo import DemoSettings, run_capstan, run_perturberator
-    from anklelab.report.demo import write_demo_report
+    from anklelab.demo import DemoSettings, run_capstan, run_perturberator, write_demo_report
 
     if out.exists() and not out.is_dir():
         raise typer.BadParameter(f"{out} exists and is not a directory", param_hint="--out")

@@ -4,8 +4,6 @@ Importing this package does not import matplotlib: each figure function imports 
 backend) when it draws.
 """
 
-from anklelab.report.comparisons import Comparison
-from anklelab.report.demo import write_demo_report
 from anklelab.report.figures_capstan import (
     chirp_tracking_figure,
     friction_figures,
@@ -28,7 +26,6 @@ from anklelab.report.sections import results_report
 __all__ = [
     "PAPER_000",
     "PAPER_001",
-    "Comparison",
     "Figure",
     "PaperValue",
     "Section",
@@ -47,6 +44,5 @@ __all__ = [
     "step_figure",
     "stiffness_figure",
     "walking_figures",
-    "write_demo_report",
     "write_report",
 ]

@@ -1,7 +1,7 @@
 """Paper versus twin: what each paper reported, what anklelab measured, the twin's truth.
 
 :func:`perturberator_comparison` and :func:`capstan_comparison` line up, for the runs of
-:mod:`anklelab.pipelines.demo`, the papers' numbers (:mod:`anklelab.report.paper_values`), the
+:mod:`anklelab.demo.run`, the papers' numbers (:mod:`anklelab.report.paper_values`), the
 measurements anklelab made on the twins and the twins' ground truth, with the error of a
 measurement against the truth where the measurement estimates it.
 """
@@ -16,15 +16,15 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike
 
-from anklelab.experiments.capstan import ChirpMetrics
-from anklelab.ident.bench import BenchStiffness, interpolate_stiffness
-from anklelab.pipelines.demo import (
+from anklelab.demo.run import (
     CHIRP,
     COMPENSATIONS,
     SETPOINTS_DEG,
     CapstanDemo,
     PerturberatorDemo,
 )
+from anklelab.experiments.capstan import ChirpMetrics
+from anklelab.ident.bench import BenchStiffness, interpolate_stiffness
 from anklelab.report.paper_values import PAPER_000, PAPER_001, PaperValue
 
 __all__ = ["COLUMNS", "Comparison", "capstan_comparison", "grouped", "perturberator_comparison"]

@@ -2,7 +2,7 @@
 
 The figures are written beside the data they show (``OUT/perturberator``, ``OUT/capstan``) by the
 walking and capstan figure functions, then embedded in the report with the comparison tables of
-:mod:`anklelab.report.comparisons`.
+:mod:`anklelab.demo.comparisons`.
 """
 
 from __future__ import annotations
@@ -14,14 +14,14 @@ from pathlib import Path
 
 from anklelab._atomic import write_text_atomic
 from anklelab._version import __version__
-from anklelab.pipelines.demo import COMPENSATIONS, CapstanDemo, DemoSettings, PerturberatorDemo
-from anklelab.report.comparisons import (
+from anklelab.demo.comparisons import (
     COLUMNS,
     Comparison,
     capstan_comparison,
     grouped,
     perturberator_comparison,
 )
+from anklelab.demo.run import COMPENSATIONS, CapstanDemo, DemoSettings, PerturberatorDemo
 from anklelab.report.html import Figure, Section, Table, write_report
 from anklelab.report.sections import friction_section, walking_section
 
