@@ -23,7 +23,7 @@ from anklelab.demo.comparisons import (
 )
 from anklelab.demo.run import COMPENSATIONS, CapstanDemo, DemoSettings, PerturberatorDemo
 from anklelab.report.html import Figure, Section, Table, write_report
-from anklelab.report.sections import friction_section, walking_section
+from anklelab.report.sections import friction_section, walking_sections
 
 __all__ = ["capstan_figures", "perturberator_figures", "write_demo_report"]
 
@@ -165,7 +165,7 @@ def write_demo_report(
             _tables(comparisons["paper_000"]),
             bode,
         ),
-        walking_section(
+        *walking_sections(
             perturberator.document,
             perturberator.directory,
             title="Walking impedance (perturberator/results.json)",

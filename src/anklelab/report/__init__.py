@@ -11,12 +11,12 @@ from anklelab.report.figures_capstan import (
     render_figure,
     step_figure,
 )
+from anklelab.report.figures_impedance import impedance_figure
 from anklelab.report.figures_walking import (
     filters_figure,
     model_fit_figure,
     save_walking_figures,
     stance_figure,
-    stiffness_figure,
     walking_figures,
 )
 from anklelab.report.html import Figure, Section, Table, figure_png, render_html, write_report
@@ -34,6 +34,7 @@ __all__ = [
     "figure_png",
     "filters_figure",
     "friction_figures",
+    "impedance_figure",
     "model_fit_figure",
     "observer_figure",
     "render_figure",
@@ -42,7 +43,6 @@ __all__ = [
     "save_walking_figures",
     "stance_figure",
     "step_figure",
-    "stiffness_figure",
     "walking_figures",
     "write_report",
 ]

@@ -228,7 +228,7 @@ def impedance_figure(
     """
     from matplotlib.figure import Figure
 
-    fig = Figure(figsize=(11.0, 3.9), layout="constrained")
+    fig = Figure(figsize=(11.0, 3.5), layout="constrained")
     axes = fig.subplots(1, 3)
     handles: dict[str, Any] = {}
     every = [tp for d in DIRECTIONS for tp in _points(document, d)]
