@@ -20,19 +20,27 @@ if TYPE_CHECKING:
 __all__ = ["demo"]
 
 
-def _table(title: str, rows: Sequence[Comparison]) -> Table:
-    """Rows under a bold heading per group; numbers never wrap."""
+def _table(title: str, rows: Sequence[Comparison]) -> tuple[Table, list[str]]:
+    """Rows under a bold heading per group; numbers never wrap. The last column refers to
+    numbered notes (returned), which say why a value departs from the paper or how it misses."""
     from anklelab.demo.comparisons import COLUMNS, grouped
 
     table = Table(title=title, box=box.SIMPLE_HEAD, title_justify="left", title_style="bold")
     for k, column in enumerate(COLUMNS):
         table.add_column(column, justify="left" if k == 0 else "right", no_wrap=k > 1)
+    notes: list[str] = []
     for group, members in grouped(rows).items():
         table.add_row(f"[bold]{group}[/bold]", end_section=False)
         for row in members:
-            table.add_row(*(escape(cell) for cell in row.cells()))
+            *cells, _ = row.cells()
+            mark = ""
+            if row.remark:
+                if row.remark not in notes:
+                    notes.append(row.remark)
+                mark = f"{'miss ' if row.miss else ''}[{notes.index(row.remark) + 1}]"
+            table.add_row(*(escape(cell) for cell in cells), escape(mark))
         table.add_section()
-    return table
+    return table, [f"[{i}] {note}" for i, note in enumerate(notes, start=1)]
 
 
 def demo(
@@ -68,8 +76,14 @@ def demo(
     console = Console()
     if not console.is_terminal:  # a log file or pipe: wide enough for the tables not to wrap
         console = Console(width=120)
-    console.print(_table("Paper 000, the Perturberator", comparisons["paper_000"]))
-    console.print(_table("Paper 001, the capstan platform", comparisons["paper_001"]))
+    for title, paper in (
+        ("Paper 000, the Perturberator", "paper_000"),
+        ("Paper 001, the capstan platform", "paper_001"),
+    ):
+        table, notes = _table(title, comparisons[paper])
+        console.print(table)
+        for note in notes:
+            console.print(note, markup=False, highlight=False)
     console.print(
         f"Sessions and results in {out}/ (perturberator/, capstan/); "
         f"all values in {summary}; open {report} in a browser."

@@ -29,11 +29,16 @@ class Figure:
 
 @dataclass(frozen=True)
 class Table:
-    """A table of already-formatted cells (numbers are formatted with ``{:.4g}``)."""
+    """A table of already-formatted cells (numbers are formatted with ``{:.4g}``).
+
+    Cells are right-aligned (numbers), the first column and the ``text_columns`` (indices of
+    columns holding sentences) left-aligned.
+    """
 
     title: str
     columns: Sequence[str]
     rows: Sequence[Sequence[Any]]
+    text_columns: Sequence[int] = ()
 
 
 @dataclass(frozen=True)
@@ -83,7 +88,15 @@ def _cell(value: Any) -> str:
 def _table(table: Table, *, heading: bool = True) -> str:
     head = "".join(f"<th>{html.escape(c)}</th>" for c in table.columns)
     body = "".join(
-        "<tr>" + "".join(f"<td>{_cell(v)}</td>" for v in row) + "</tr>" for row in table.rows
+        "<tr>"
+        + "".join(
+            f'<td class="text">{_cell(v)}</td>'
+            if k in table.text_columns
+            else f"<td>{_cell(v)}</td>"
+            for k, v in enumerate(row)
+        )
+        + "</tr>"
+        for row in table.rows
     )
     title = f"<h3>{html.escape(table.title)}</h3>" if heading else ""
     return f"{title}<table><thead><tr>{head}</tr></thead><tbody>{body}</tbody></table>"
@@ -127,11 +140,10 @@ body{font-family:system-ui,sans-serif;max-width:1100px;margin:1.5em auto;padding
 h1{border-bottom:2px solid #444;margin-bottom:0.4em}
 h2{margin-top:1.6em;border-bottom:1px solid #bbb}
 table{border-collapse:collapse;margin:0.5em 0 1.2em}td,th{border:1px solid #ccc;padding:2px 8px}
-th{background:#f0f0f0}td{text-align:right}td:first-child{text-align:left}
+th{background:#f0f0f0}td{text-align:right}td:first-child,td.text{text-align:left}
 figure{display:inline-block;margin:0.5em 0;vertical-align:top;max-width:100%}
 img{max-width:100%;height:auto}figcaption{font-size:0.9em;color:#555;max-width:1100px}
 .meta table{font-size:0.8em;color:#444;margin:0}.meta td{text-align:left}
-td{white-space:nowrap}
 details{margin:0.3em 0 1em}summary{cursor:pointer;color:#333}
 ul.notes{background:#fff6e0;border-left:4px solid #e0a000;padding:0.4em 1em 0.4em 2em}
 """

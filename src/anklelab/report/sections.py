@@ -180,6 +180,32 @@ def _analysed(path: Path) -> str:
     return stamp.strftime("%Y-%m-%d %H:%M UTC")
 
 
+def _weak_channels(by_channel: dict[str, Any]) -> str:
+    """Why a channel's own filter VAF below 50 % is harmless (lateral) or not (the others)."""
+    weak = {c: v for c, v in by_channel.items() if isinstance(v, int | float) and v < 50.0}
+
+    def listed(channels: dict[str, float]) -> str:
+        return f"{', '.join(channels)} ({', '.join(f'{v:.1f} %' for v in channels.values())})"
+
+    lateral = {c: v for c, v in weak.items() if c.startswith("fy")}
+    poor = {c: v for c, v in weak.items() if c not in lateral}
+    text = []
+    if lateral:
+        text.append(
+            f"The platform filters explain little of the lateral channels {listed(lateral)} on "
+            "their own: a sagittal perturbation puts almost no force on them, so what they hold "
+            "is noise, and they add nothing to the pooled VAF, which weighs each channel by its "
+            "variance."
+        )
+    if poor:
+        text.append(
+            f"The platform filters fit {listed(poor)} poorly: check that the calibration trials "
+            "cover the walking perturbations and that nobody touched the plate (see the report "
+            "guide)."
+        )
+    return " ".join(text)
+
+
 def run_metadata(document: dict[str, Any], directory: Path) -> dict[str, str]:
     """The report's header table for a ``results.json`` document: subject, session, date."""
     return dict(run_rows(document, analysed=_analysed(directory / "results.json")))
@@ -296,7 +322,7 @@ def walking_sections(
     )
     details = Section(
         f"{title}: details",
-        "",
+        _weak_channels(by_channel),
         tables,
         png_figures(directory, detail_specs),
         details=[settings_table(settings)] if isinstance(settings, dict) else [],

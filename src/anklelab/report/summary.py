@@ -110,7 +110,7 @@ def _interval(point: Mapping[str, Any], key: str, fmt: str) -> str:
     text = f"{e.mean:{fmt}}"
     if not (math.isnan(e.low) or math.isnan(e.high)):
         mark = "" if e.kind != SD95 else "*"
-        text += f" [{e.low:{fmt}}, {e.high:{fmt}}]{mark}"
+        text += f"\N{NO-BREAK SPACE}[{e.low:{fmt}},\N{NO-BREAK SPACE}{e.high:{fmt}}]{mark}"
     return text + (" (poorly determined)" if e.poorly_determined else "")
 
 
