@@ -121,8 +121,10 @@ def friction(
     table = Table(title=f"pinion-shaft friction and inertia from {ident_dir}")
     for column in ("parameter", "identified", *(("truth", "error %") if data.truth else ())):
         table.add_column(column, justify="right" if column != "parameter" else "left")
-    flat = _leaves(result)
-    truth = _leaves(data.truth) if data.truth else {}
+    from anklelab._params import dotted_leaves
+
+    flat = dotted_leaves(result)
+    truth = dotted_leaves(data.truth) if data.truth else {}
     for key, value in flat.items():
         if key.startswith("fit."):
             continue
@@ -136,14 +138,3 @@ def friction(
         f"spin-down VAF {model.spindown_vaf_percent_:.2f} %, chirp VAF "
         f"{model.chirp_vaf_percent_:.2f} %; written to {out / 'friction.json'}"
     )
-
-
-def _leaves(tree: dict, prefix: str = "") -> dict[str, float]:
-    out: dict[str, float] = {}
-    for key, value in tree.items():
-        name = f"{prefix}{key}"
-        if isinstance(value, dict):
-            out |= _leaves(value, f"{name}.")
-        else:
-            out[name] = value
-    return out
