@@ -22,6 +22,7 @@ RANK = {
     "_version": 0,
     "errors": 0,
     "forceplate": 0,
+    "metrics": 0,
     "platforms": 1,
     "sim": 2,
     "control": 3,

@@ -7,14 +7,22 @@ new one.
 
 from __future__ import annotations
 
+import json
 import os
 import secrets
 import shutil
 from collections.abc import Iterator
 from contextlib import contextmanager
 from pathlib import Path
+from typing import Any
 
-__all__ = ["atomic_directory", "atomic_file", "write_bytes_atomic", "write_text_atomic"]
+__all__ = [
+    "atomic_directory",
+    "atomic_file",
+    "write_bytes_atomic",
+    "write_json_atomic",
+    "write_text_atomic",
+]
 
 
 def _temporary(target: Path) -> Path:
@@ -104,3 +112,9 @@ def write_bytes_atomic(path: str | os.PathLike[str], data: bytes) -> Path:
 def write_text_atomic(path: str | os.PathLike[str], text: str) -> Path:
     """:func:`write_bytes_atomic` for UTF-8 text."""
     return write_bytes_atomic(path, text.encode("utf-8"))
+
+
+def write_json_atomic(path: str | os.PathLike[str], document: Any) -> Path:
+    """Write ``document`` as indented JSON (with a final newline) atomically; numpy scalars
+    are written as numbers."""
+    return write_text_atomic(path, json.dumps(document, indent=2, default=float) + "\n")

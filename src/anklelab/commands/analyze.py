@@ -18,7 +18,7 @@ from rich.table import Table
 
 from anklelab._atomic import write_text_atomic
 from anklelab.commands._options import SessionArgument, SettingsOption
-from anklelab.commands._progress import recording_progress
+from anklelab.commands._progress_bars import recording_progress
 
 if TYPE_CHECKING:
     from anklelab.data.session import Session

@@ -12,7 +12,7 @@ from rich.console import Console
 from rich.markup import escape
 from rich.table import Table
 
-from anklelab.commands._progress import recording_progress
+from anklelab.commands._progress_bars import recording_progress
 
 if TYPE_CHECKING:
     from anklelab.demo.comparisons import Comparison

@@ -11,7 +11,7 @@ from rich.console import Console
 from rich.table import Table
 
 from anklelab.commands._options import SessionArgument, SettingsOption
-from anklelab.commands._progress import recording_progress
+from anklelab.commands._progress_bars import recording_progress
 
 app = typer.Typer(help="Identify platform models from recorded data.", no_args_is_help=True)
 

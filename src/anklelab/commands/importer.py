@@ -7,7 +7,7 @@ from typing import Annotated
 
 import typer
 
-from anklelab.commands._progress import recording_progress
+from anklelab.commands._progress_bars import recording_progress
 from anklelab.errors import AnklelabError
 
 

@@ -26,7 +26,7 @@ def capstan_ident(
     Writes DESIGN.md section 6's directory (plus truth.json with the twin's values), ready for
     `anklelab identify friction`.
     """
-    from anklelab.commands._progress import recording_progress
+    from anklelab.commands._progress_bars import recording_progress
     from anklelab.experiments.capstan_ident import (
         IdentProtocol,
         simulate_ident,
@@ -82,7 +82,7 @@ def perturberator(
     The session carries a truth group (parameters, reference stiffness per timing point and
     direction, true heel contacts and onsets, time courses) for validating analyses.
     """
-    from anklelab.commands._progress import recording_progress
+    from anklelab.commands._progress_bars import recording_progress
     from anklelab.data import save_session
     from anklelab.errors import ParameterError
     from anklelab.experiments.perturberator import simulate_perturberator

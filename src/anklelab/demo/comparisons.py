@@ -14,7 +14,6 @@ from dataclasses import dataclass, replace
 from typing import Any
 
 import numpy as np
-from numpy.typing import ArrayLike
 
 from anklelab.demo.run import (
     CHIRP,
@@ -26,6 +25,7 @@ from anklelab.demo.run import (
 )
 from anklelab.experiments.capstan import ChirpMetrics
 from anklelab.ident.bench import BenchStiffness, interpolate_stiffness
+from anklelab.pipelines.walking.results import sd
 from anklelab.report.paper_values import PAPER_000, PAPER_001, PaperValue
 
 __all__ = ["COLUMNS", "Comparison", "capstan_comparison", "grouped", "perturberator_comparison"]
@@ -164,11 +164,6 @@ def grouped(rows: Sequence[Comparison]) -> dict[str, list[Comparison]]:
     return groups
 
 
-def _sd(values: ArrayLike) -> float:
-    values = np.asarray(values, dtype=float)
-    return float(np.std(values, ddof=1)) if values.size > 1 else 0.0
-
-
 def _ends(i: int, n: int, first: str, last: str) -> PaperValue | None:
     """Paper 000's value for the first or last of ``n`` ordered rows (the ends of a range)."""
     if i == 0:
@@ -235,7 +230,7 @@ def perturberator_comparison(demo: PerturberatorDemo) -> list[Comparison]:
             "%",
             PAPER_000["filter_vaf_percent"],
             float(np.mean(results.filter_vaf)),
-            _sd(results.filter_vaf),
+            sd(results.filter_vaf),
             fmt=".1f",
             remark="paper 000 filtered the acceleration alone; anklelab's default adds the "
             "angle (the plate's gravity tilt), see the walking-analysis guide",
@@ -252,7 +247,7 @@ def perturberator_comparison(demo: PerturberatorDemo) -> list[Comparison]:
                 "N·m/rad",
                 paper,
                 float(np.mean(tp.stiffness)),
-                _sd(tp.stiffness),
+                sd(tp.stiffness),
                 ref["stiffness_nm_per_rad"],
                 fmt=".0f",
                 remark="" if paper is None else _stiffness_remark(paper, i == 0),
@@ -265,7 +260,7 @@ def perturberator_comparison(demo: PerturberatorDemo) -> list[Comparison]:
             f"onset sd {tp.delay_ms:g} ms",
             "ms",
             PAPER_000.get(f"onset_sd_ms_{tp.delay_ms:g}"),
-            _sd(tp.onset_ms),
+            sd(tp.onset_ms),
             truth=ref["onset_sd_ms"],
             fmt=".1f",
             remark=f"the twin's trigger is set to paper 000's spread; an sd of {n} trials "
@@ -282,7 +277,7 @@ def perturberator_comparison(demo: PerturberatorDemo) -> list[Comparison]:
             "%",
             PAPER_000["model_vaf_percent"],
             float(np.mean(vaf)),
-            _sd(vaf),
+            sd(vaf),
             fmt=".1f",
         ),
         Comparison(
@@ -291,7 +286,7 @@ def perturberator_comparison(demo: PerturberatorDemo) -> list[Comparison]:
             "kg·m²",
             PAPER_000["inertia_kgm2"],
             float(np.mean(inertia)),
-            _sd(inertia),
+            sd(inertia),
             float(np.mean([ref["inertia_kgm2"] for ref in reference])),
             fmt=".3f",
         ),
@@ -308,7 +303,7 @@ def perturberator_comparison(demo: PerturberatorDemo) -> list[Comparison]:
                 "%",
                 PAPER_000.get(f"window_{window:g}_change_percent"),
                 float(np.mean(change)),
-                _sd(change),
+                sd(change),
                 fmt=".1f",
                 remark="depends on how the stiffness changes within the window: a property of "
                 "paper 000's foot and gait that the twin was not built to reproduce",
@@ -353,7 +348,7 @@ def _bench_rows(demo: PerturberatorDemo) -> list[Comparison]:
             "",
             PAPER_000["bench_r2"],
             float(np.mean(r2)),
-            _sd(r2),
+            sd(r2),
             fmt=".3f",
             remark="the twin's testing machine is the linear law plus load-cell noise",
         )
@@ -373,7 +368,7 @@ def _bench_rows(demo: PerturberatorDemo) -> list[Comparison]:
                 "%",
                 PAPER_000["walking_vs_bench_error_percent"],
                 float(np.mean(np.abs(signed))),
-                _sd(np.abs(signed).tolist()),
+                sd(np.abs(signed).tolist()),
                 float(np.mean(true_errors)),
                 estimate=False,
                 fmt=".1f",

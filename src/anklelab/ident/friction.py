@@ -42,8 +42,8 @@ from anklelab._params import parameters_from_mapping, read_parameter_document
 from anklelab.data.capstan_ident import IdentData, IdentRun
 from anklelab.errors import ParameterError, SessionFormatError
 from anklelab.ident._base import Estimator, interval
+from anklelab.metrics import vaf
 from anklelab.platforms.capstan import FrictionParameters
-from anklelab.signals.metrics import vaf
 from anklelab.sim.capstan.friction import friction_array, friction_step, friction_torque
 
 __all__ = ["FrictionIdentifier", "SpindownFit", "read_friction_json"]
