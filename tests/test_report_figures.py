@@ -6,7 +6,7 @@ import pytest
 from matplotlib.figure import Figure
 
 from anklelab.report import figures_walking
-from anklelab.report.figures_impedance import CI95, SD95, estimate, impedance_figure
+from anklelab.report.figures_impedance import CI95, IMPEDANCE, SD95, impedance_figure, interval
 from anklelab.report.summary import impedance_summary_table, notes, readable_name
 from tests.figure_checks import problems
 
@@ -64,60 +64,91 @@ def test_stance_profiles_show_angles_in_degrees(results):
     assert 1.0 < np.max(np.abs(perturbed - unperturbed)) < 3.0
 
 
-def _document(**stiffness):
-    point = {
-        "delay_ms": 100.0,
-        "direction": "dorsi",
-        "cop_m": 0.06,
-        "stiffness_nm_per_rad": {"mean": 1200.0, "sd": 10.0, **stiffness},
-        "damping_nms_per_rad": {"mean": 2.0, "sd": 0.4, "poorly_determined": True},
-        "inertia_kgm2": {"mean": 0.3, "sd": 0.01},
-        "vaf_percent": {"mean": 99.0, "sd": 0.1},
-    }
-    return {
-        "timing_points": [point, {**point, "delay_ms": 475.0, "cop_m": 0.105}],
-        "bench": [
-            {"distance_m": 0.06, "stiffness_nm_per_rad": 1300.0, "r2": 0.99},
-            {"distance_m": 0.11, "stiffness_nm_per_rad": 975.0, "r2": 0.99},
-        ],
-    }
+def _results(stiffness_ci95=(np.nan, np.nan), flag_last_stiffness=False, warnings=()):
+    """Two dorsiflexion conditions; damping's interval spans zero at both (poorly determined)."""
+    from anklelab.ident.bench import BenchStiffness
+    from anklelab.pipelines.walking import TimingPoint, WalkingResults, WalkingSettings
+    from anklelab.pipelines.walking.results import Estimate
+
+    def point(delay_ms, cop_m, ci95):
+        return TimingPoint(
+            delay_ms,
+            "dorsi",
+            10,
+            20,
+            cop_m,
+            Estimate(1200.0, 10.0, ci95),
+            Estimate(2.0, 0.4, (-0.5, 4.5)),
+            Estimate(0.3, 0.01),
+            Estimate(99.0, 0.1),
+            "constant",
+            Estimate(0.0, 0.0),
+            False,
+            warnings=(f"dorsi/{delay_ms:g}: a point's doubt",) if delay_ms == 475.0 else (),
+        )
+
+    last = (300.0, 2100.0) if flag_last_stiffness else stiffness_ci95
+    return WalkingResults(
+        settings=WalkingSettings(),
+        platform_filters={},
+        timing_points=[point(100.0, 0.06, stiffness_ci95), point(475.0, 0.105, last)],
+        bench=[BenchStiffness(0.06, 1300.0, 0.99, 5), BenchStiffness(0.11, 975.0, 0.99, 5)],
+        warnings=warnings,
+    )
 
 
 def test_intervals_are_the_ci95_when_given_else_labelled_sd():
-    with_ci = _document(ci95=[1180.0, 1230.0])
-    e = estimate(with_ci["timing_points"][0], "stiffness_nm_per_rad")
+    stiffness = IMPEDANCE[0]
+    with_ci = _results((1180.0, 1230.0))
+    e = interval(with_ci.timing_points[0], stiffness)
     assert (e.low, e.high, e.kind) == (1180.0, 1230.0, CI95)
-    e = estimate(_document()["timing_points"][0], "stiffness_nm_per_rad")
+    e = interval(_results().timing_points[0], stiffness)  # an older file: no intervals
     assert (e.low, e.high, e.kind) == (1180.4, 1219.6, SD95)
-    for bad in ([1, "x"], "wide", [1.0]):  # malformed ci95: falls back, labelled so
-        assert (
-            estimate(_document(ci95=bad)["timing_points"][0], "stiffness_nm_per_rad").kind == SD95
-        )
     table = impedance_summary_table(with_ci)
     assert table.rows[0][3] == "1200\N{NO-BREAK SPACE}[1180,\N{NO-BREAK SPACE}1230]"
-    assert table.rows[0][4].endswith("* (poorly determined)")
+    assert table.rows[0][4].endswith("[-0.50,\N{NO-BREAK SPACE}4.50] (poorly determined)")
     assert table.rows[1][-2:] == ["1008", "+19.1"]  # 1300 - 325 * 4.5 / 5 at 10.5 cm; error
+    assert "*" in impedance_summary_table(_results()).rows[0][3]  # mean ± 1.96 sd, marked
+
+
+def test_intervals_read_back_from_results_json_are_the_same():
+    from anklelab.pipelines.walking import WalkingResults
+
+    results = _results((1180.0, 1230.0), flag_last_stiffness=True)
+    again = WalkingResults.from_dict(results.to_dict(session="s"))
+    assert impedance_summary_table(again).rows == impedance_summary_table(results).rows
+    assert notes(again) == notes(results)
+
+
+def test_an_interval_beside_its_estimate_is_drawn_as_given():
+    """A resampling interval need not contain the estimate (1200 below [1210, 1260])."""
+    fig = impedance_figure(_results((1210.0, 1260.0)))
+    bars = [c for c in fig.axes[0].collections if len(c.get_segments())]
+    assert [list(b.get_segments()[0][:, 1]) for b in bars[:2]] == [[1210.0, 1260.0]] * 2
+    assert problems(fig) == []
 
 
 def test_the_key_figure_draws_flags_hollow_and_the_paper():
-    document = _document(ci95=[1180.0, 1230.0])
-    document["timing_points"][1]["flags"] = ["stiffness_nm_per_rad"]
-    fig = impedance_figure(document)
+    results = _results((1180.0, 1230.0), flag_last_stiffness=True, warnings=("implausible x",))
+    fig = impedance_figure(results)
     stiffness, damping, _ = fig.axes
     drawn = [line for line in stiffness.lines if line.get_marker() == "o" and len(line.get_xdata())]
     face = [line.get_markerfacecolor() for line in drawn]
-    assert face == ["tab:blue", "white"]  # the 475 ms stiffness is flagged
+    assert face == ["tab:blue", "white"]  # the 475 ms stiffness is poorly determined
     assert all(
         line.get_markerfacecolor() == "white" for line in damping.lines if line.get_marker() == "o"
-    )  # damping is flagged at both points
+    )  # damping is poorly determined at both points
     stars = [line for line in stiffness.lines if line.get_marker() == "*"]
     assert [list(s.get_ydata()) for s in stars] == [[1277.0, 860.0]]  # paper 000's range ends
     legend = " ".join(t.get_text() for t in fig.legends[0].get_texts())
     assert "poorly determined" in legend and "paper 000" in legend and "bench" in legend
     assert problems(fig) == []
-    assert [n for n in notes(document)] == [
-        "dorsi 100 ms: damping poorly determined (drawn hollow)",
-        "dorsi 475 ms: stiffness, damping poorly determined (drawn hollow)",
+    assert notes(results) == [
+        "implausible x",
+        "dorsi/475: a point's doubt",
+        "Poorly determined (the 95 % interval spans zero or is wider than ±50 % of the "
+        "estimate; drawn hollow, not to be read as precise numbers): stiffness at dorsi/475; "
+        "damping at all 2 conditions.",
     ]
 
 

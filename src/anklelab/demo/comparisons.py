@@ -246,8 +246,8 @@ def perturberator_comparison(demo: PerturberatorDemo) -> list[Comparison]:
                 f"stiffness {tp.delay_ms:g} ms (lever arm {100 * tp.cop_m:.1f} cm)",
                 "N·m/rad",
                 paper,
-                float(np.mean(tp.stiffness)),
-                sd(tp.stiffness),
+                tp.stiffness.mean,
+                tp.stiffness.sd,
                 ref["stiffness_nm_per_rad"],
                 fmt=".0f",
                 remark="" if paper is None else _stiffness_remark(paper, i == 0),
@@ -268,8 +268,8 @@ def perturberator_comparison(demo: PerturberatorDemo) -> list[Comparison]:
             "these trials in the next column)",
         )
         rows.append(row if row.departs else replace(row, remark=""))
-    vaf = [float(np.mean(tp.vaf)) for tp in dorsi]
-    inertia = [float(np.mean(tp.inertia)) for tp in dorsi]
+    vaf = [tp.vaf.mean for tp in dorsi]
+    inertia = [tp.inertia.mean for tp in dorsi]
     rows += [
         Comparison(
             walk,
@@ -293,8 +293,7 @@ def perturberator_comparison(demo: PerturberatorDemo) -> list[Comparison]:
     ]
     for window in results.settings.sensitivity_windows_ms:
         change = [
-            100 * abs(tp.window_stiffness[f"{window:g}"] / np.mean(tp.stiffness) - 1)
-            for tp in dorsi
+            100 * abs(tp.window_stiffness[f"{window:g}"] / tp.stiffness.mean - 1) for tp in dorsi
         ]
         rows.append(
             Comparison(

@@ -7,13 +7,12 @@ walking and capstan figure functions, then embedded in the report with the compa
 
 from __future__ import annotations
 
-import json
 import re
 from collections.abc import Sequence
 from datetime import UTC, datetime
 from pathlib import Path
 
-from anklelab._atomic import write_text_atomic
+from anklelab._atomic import write_json_atomic
 from anklelab._version import __version__
 from anklelab.demo.comparisons import (
     COLUMNS,
@@ -154,7 +153,7 @@ def write_demo_report(
         },
         **{paper: [row.to_dict() for row in rows] for paper, rows in comparisons.items()},
     }
-    summary_path = write_text_atomic(out / "summary.json", json.dumps(summary, indent=2) + "\n")
+    summary_path = write_json_atomic(out / "summary.json", summary)
     bode = perturberator_figures(perturberator)
     control = capstan_figures(capstan)
     friction_dir = capstan.directory / "friction"

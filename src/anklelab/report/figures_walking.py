@@ -1,7 +1,7 @@
 """Figures of the walking impedance analysis (paper 000, Figs. 5-8).
 
 The impedance summaries (against timing point and lever arm) come from
-:mod:`anklelab.report.figures_impedance`, drawn from the ``results.json`` document.
+:mod:`anklelab.report.figures_impedance`, drawn from what ``results.json`` holds.
 
 Each function returns a matplotlib :class:`~matplotlib.figure.Figure` built without pyplot (no
 global backend state; PNG rendering uses Agg), so importing this module does not import
@@ -185,7 +185,7 @@ def model_fit_figure(results: WalkingResults) -> Figure:
         ax.plot(t_ms, tp.model_torque.mean(axis=0), "k--", lw=1.2, label="model I θ'' + b θ' + k θ")
         ax.set_title(
             f"{_DIRECTION_WORDS[tp.direction]}, {tp.delay_ms:g} ms\n"
-            f"k = {np.mean(tp.stiffness):.0f} N·m/rad, VAF {np.mean(tp.vaf):.1f} %",
+            f"k = {tp.stiffness.mean:.0f} N·m/rad, VAF {tp.vaf.mean:.1f} %",
             fontsize="medium",
         )
         ax.set_xlabel("time after onset (ms)")
@@ -198,13 +198,12 @@ def model_fit_figure(results: WalkingResults) -> Figure:
 
 def walking_figures(results: WalkingResults) -> dict[str, Figure]:
     """Every walking figure, by file stem."""
-    document = results.to_dict(session="")
     return {
-        "impedance_summary": impedance_figure(document),
+        "impedance_summary": impedance_figure(results),
         "filters": filters_figure(results.filters),
         "stance_profiles": stance_figure(results),
         "model_fit": model_fit_figure(results),
-        "impedance_vs_lever_arm": impedance_figure(document, x="lever_arm"),
+        "impedance_vs_lever_arm": impedance_figure(results, x="lever_arm"),
     }
 
 

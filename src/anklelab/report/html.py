@@ -15,16 +15,37 @@ from typing import Any
 
 from anklelab._atomic import write_text_atomic
 
-__all__ = ["Figure", "Section", "Table", "figure_png", "render_html", "write_report"]
+__all__ = [
+    "PNG_SIGNATURE",
+    "Figure",
+    "Section",
+    "Table",
+    "figure_png",
+    "render_html",
+    "write_report",
+]
+
+PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
+"""The eight bytes every PNG file starts with."""
 
 
 @dataclass(frozen=True)
 class Figure:
-    """A figure as PNG bytes with a caption."""
+    """A figure as PNG bytes with a caption.
+
+    Raises
+    ------
+    ValueError
+        ``png`` does not start with the PNG signature (only images are embedded).
+    """
 
     title: str
     png: bytes
     caption: str = ""
+
+    def __post_init__(self) -> None:
+        if not self.png.startswith(PNG_SIGNATURE):
+            raise ValueError(f"figure {self.title!r}: not PNG data")
 
 
 @dataclass(frozen=True)
@@ -143,7 +164,7 @@ table{border-collapse:collapse;margin:0.5em 0 1.2em}td,th{border:1px solid #ccc;
 th{background:#f0f0f0}td{text-align:right}td:first-child,td.text{text-align:left}
 figure{display:inline-block;margin:0.5em 0;vertical-align:top;max-width:100%}
 img{max-width:100%;height:auto}figcaption{font-size:0.9em;color:#555;max-width:1100px}
-.meta table{font-size:0.8em;color:#444;margin:0}.meta td{text-align:left}
+.meta table{font-size:0.8em;color:#444;margin:0}.meta td{text-align:left;overflow-wrap:anywhere}
 details{margin:0.3em 0 1em}summary{cursor:pointer;color:#333}
 ul.notes{background:#fff6e0;border-left:4px solid #e0a000;padding:0.4em 1em 0.4em 2em}
 """
@@ -178,7 +199,15 @@ def render_html(title: str, sections: Iterable[Section], metadata: Mapping[str, 
 
 
 def write_report(
-    path: str | Path, title: str, sections: Iterable[Section], metadata: Mapping[str, Any]
+    path: str | Path,
+    title: str,
+    sections: Iterable[Section],
+    metadata: Mapping[str, Any],
+    *,
+    overwrite: bool = True,
 ) -> Path:
-    """Write the report to ``path`` atomically and return the path."""
-    return write_text_atomic(path, render_html(title, sections, metadata))
+    """Write the report to ``path`` atomically and return the path.
+
+    With ``overwrite`` false an existing ``path`` raises ``FileExistsError``.
+    """
+    return write_text_atomic(path, render_html(title, sections, metadata), overwrite=overwrite)

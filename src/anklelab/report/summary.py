@@ -1,8 +1,8 @@
 """What the top of a walking report shows: who and what was analysed, the key numbers, the
 settings in words.
 
-Everything is read from a ``results.json`` document, defensively: keys that an older (or a
-newer) anklelab does not write are shown as "—", never guessed.
+The numbers come from the walking results (as read back from ``results.json``); the run table
+from the document itself. What an older anklelab did not write is shown as "—", never guessed.
 """
 
 from __future__ import annotations
@@ -10,17 +10,21 @@ from __future__ import annotations
 import math
 import re
 from collections.abc import Mapping, Sequence
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from anklelab.report.figures_impedance import (
     DIRECTIONS,
-    QUANTITIES,
+    IMPEDANCE,
     SD95,
     bench_at,
-    estimate,
+    interval,
     interval_kind,
 )
 from anklelab.report.html import Table
+
+if TYPE_CHECKING:
+    from anklelab.pipelines.walking import TimingPoint, WalkingResults
+    from anklelab.pipelines.walking.results import Quantity
 
 __all__ = ["impedance_summary_table", "notes", "readable_name", "run_rows", "settings_table"]
 
@@ -103,10 +107,11 @@ def run_rows(document: Mapping[str, Any], *, analysed: str) -> list[list[str]]:
     ]
 
 
-def _interval(point: Mapping[str, Any], key: str, fmt: str) -> str:
-    e = estimate(point, key)
+def _interval(point: TimingPoint, quantity: Quantity) -> str:
+    e = interval(point, quantity)
     if math.isnan(e.mean):
         return "—"
+    fmt = quantity.format
     text = f"{e.mean:{fmt}}"
     if not (math.isnan(e.low) or math.isnan(e.high)):
         mark = "" if e.kind != SD95 else "*"
@@ -114,26 +119,21 @@ def _interval(point: Mapping[str, Any], key: str, fmt: str) -> str:
     return text + (" (poorly determined)" if e.poorly_determined else "")
 
 
-def impedance_summary_table(document: Mapping[str, Any]) -> Table:
+def impedance_summary_table(results: WalkingResults) -> Table:
     """One row per condition: lever arm, k, b, I with 95 % intervals, VAF, bench, error."""
-    points = [tp for tp in document.get("timing_points") or [] if isinstance(tp, Mapping)]
-    cop = [
-        tp.get("cop_m") if isinstance(tp.get("cop_m"), int | float) else math.nan for tp in points
-    ]
-    bench = bench_at(document, cop)
-    formats = {"stiffness_nm_per_rad": ".0f", "damping_nms_per_rad": ".2f", "inertia_kgm2": ".3f"}
+    points = results.timing_points
+    bench = bench_at(results, [tp.cop_m for tp in points])
     rows = []
     for i, tp in enumerate(points):
-        vaf = tp.get("vaf_percent") if isinstance(tp.get("vaf_percent"), Mapping) else {}
-        k = estimate(tp, "stiffness_nm_per_rad").mean
+        k = tp.stiffness.mean
         b = math.nan if bench is None else float(bench[i])
         rows.append(
             [
-                DIRECTIONS.get(tp.get("direction"), (str(tp.get("direction", "?")),))[0],
-                f"{tp.get('delay_ms', math.nan):g}",
-                "—" if math.isnan(cop[i]) else f"{100 * cop[i]:.1f}",
-                *(_interval(tp, key, formats[key]) for key, _, _ in QUANTITIES),
-                "—" if vaf.get("mean") is None else f"{vaf['mean']:.1f}",
+                DIRECTIONS.get(tp.direction, (tp.direction,))[0],
+                f"{tp.delay_ms:g}",
+                "—" if math.isnan(tp.cop_m) else f"{100 * tp.cop_m:.1f}",
+                *(_interval(tp, q) for q in IMPEDANCE),
+                "—" if math.isnan(tp.vaf.mean) else f"{tp.vaf.mean:.1f}",
                 "—" if math.isnan(b) else f"{b:.0f}",
                 "—" if math.isnan(b) or math.isnan(k) else f"{100 * (k - b) / b:+.1f}",
             ]
@@ -145,9 +145,7 @@ def impedance_summary_table(document: Mapping[str, Any]) -> Table:
             "direction",
             "timing point (ms)",
             "lever arm (cm)",
-            "stiffness (N·m/rad)",
-            "damping (N·m·s/rad)",
-            "inertia (kg·m²)",
+            *(f"{q.name} ({q.unit})" for q in IMPEDANCE),
             "model VAF (%)",
             "bench stiffness (N·m/rad)",
             "walking − bench (%)",
@@ -156,15 +154,21 @@ def impedance_summary_table(document: Mapping[str, Any]) -> Table:
     )
 
 
-def notes(document: Mapping[str, Any]) -> list[str]:
-    """What a reader must know before trusting the numbers: warnings and flags, in words."""
-    found = [str(w) for w in document.get("warnings") or []]
-    for tp in document.get("timing_points") or []:
-        if not isinstance(tp, Mapping):
-            continue
-        where = f"{tp.get('direction', '?')} {tp.get('delay_ms', math.nan):g} ms"
-        found += [f"{where}: {w}" for w in tp.get("warnings") or []]
-        flagged = [name for key, name, _ in QUANTITIES if estimate(tp, key).poorly_determined]
-        if flagged:
-            found.append(f"{where}: {', '.join(flagged)} poorly determined (drawn hollow)")
-    return [re.sub(r"\s+", " ", text).strip() for text in found]
+def notes(results: WalkingResults) -> list[str]:
+    """What a reader must know before trusting the numbers, in words: the analysis' warnings
+    (plausibility, dropped conditions), each condition's, and which quantities are poorly
+    determined where (drawn hollow)."""
+    found = [*results.warnings, *(w for tp in results.timing_points for w in tp.warnings)]
+    n = len(results.timing_points)
+    vague = []
+    for q in IMPEDANCE:
+        where = [tp.key for tp in results.timing_points if getattr(tp, q.name).poorly_determined]
+        if where:
+            at = f"all {n} conditions" if len(where) == n > 1 else ", ".join(where)
+            vague.append(f"{q.name} at {at}")
+    if vague:
+        found.append(
+            f"Poorly determined (the 95 % interval spans zero or is wider than ±50 % of the "
+            f"estimate; drawn hollow, not to be read as precise numbers): {'; '.join(vague)}."
+        )
+    return [re.sub(r"\s+", " ", str(text)).strip() for text in found]
