@@ -28,9 +28,28 @@ FLAGS = [
 
 @dataclass(frozen=True)
 class PageView:
+    """What the page showed: console errors, every image (``alt``, ``complete``, natural
+    ``width``/``height``, and ``box``: its displayed ``x``, ``y``, ``w``, ``h`` in CSS pixels),
+    the page's visible text, its width and a full-page screenshot."""
+
     console_errors: list[str]
     images: list[dict]
     screenshot: Path
+    text: str = ""
+    page_width: int = 0
+
+    def overlapping_images(self) -> list[tuple[str, str]]:
+        """Pairs of images whose displayed boxes overlap."""
+        boxes = [(img["alt"], img["box"]) for img in self.images]
+        return [
+            (a, b)
+            for i, (a, p) in enumerate(boxes)
+            for b, q in boxes[i + 1 :]
+            if p["x"] < q["x"] + q["w"]
+            and q["x"] < p["x"] + p["w"]
+            and p["y"] < q["y"] + q["h"]
+            and q["y"] < p["y"] + p["h"]
+        ]
 
 
 def require_chromium() -> None:
@@ -52,15 +71,18 @@ def view(page_path: Path, screenshot_name: str) -> PageView:
     errors: list[str] = []
     with sync_playwright() as pw:
         browser = pw.chromium.launch(executable_path=CHROMIUM, headless=True, args=FLAGS)
-        page = browser.new_page(viewport={"width": 1200, "height": 900})
+        page = browser.new_page(viewport={"width": 1400, "height": 900})
         page.on("console", lambda m: errors.append(m.text) if m.type == "error" else None)
         page.on("pageerror", lambda e: errors.append(str(e)))
         page.goto(page_path.resolve().as_uri(), wait_until="load")
         images = page.eval_on_selector_all(
             "img",
-            "els => els.map(e => ({alt: e.alt, complete: e.complete,"
-            " width: e.naturalWidth, height: e.naturalHeight}))",
+            "els => els.map(e => { const r = e.getBoundingClientRect();"
+            " return {alt: e.alt, complete: e.complete, width: e.naturalWidth,"
+            " height: e.naturalHeight, box: {x: r.x, y: r.y, w: r.width, h: r.height}}; })",
         )
+        text = page.inner_text("body")
+        width = page.evaluate("document.documentElement.scrollWidth")
         page.screenshot(path=str(shot), full_page=True)
         browser.close()
-    return PageView(errors, images, shot)
+    return PageView(errors, images, shot, text, width)

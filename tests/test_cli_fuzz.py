@@ -296,6 +296,53 @@ FRICTION = {
     "static_friction_nm": 1.0,
 }
 WALKING = {"platform_filters": {}, "timing_points": []}
+_ESTIMATE = {"mean": 1200.0, "sd": 10.0, "ci95": [1180.0, 1230.0], "poorly_determined": False}
+TIMING_POINT = {
+    "delay_ms": 100.0,
+    "direction": "dorsi",
+    "n_perturbed": 2,
+    "n_unperturbed": 4,
+    "cop_m": 0.06,
+    "stiffness_nm_per_rad": _ESTIMATE,
+    "damping_nms_per_rad": _ESTIMATE,
+    "inertia_kgm2": _ESTIMATE,
+    "vaf_percent": _ESTIMATE,
+    "stiffness_change_fraction": _ESTIMATE,
+    "stiffness_model": "constant",
+    "stiffness_changes": False,
+    "window_sensitivity": {"75": {"stiffness_nm_per_rad": 1190.0}},
+    "warnings": ["dorsi/100: a doubt"],
+}
+"""A valid ``results.json`` timing point as the report reads it (intervals, flags, warnings)."""
+TIMING_POINT_PATHS = [(key,) for key in TIMING_POINT] + [
+    ("stiffness_nm_per_rad", key) for key in _ESTIMATE
+]
+
+
+def walking_document(change: tuple[tuple[str, ...], object]) -> bytes:
+    """A walking ``results.json`` with one timing point, one of its values (or one of its
+    stiffness estimate's) replaced."""
+    path, value = change
+    point = {**TIMING_POINT, "stiffness_nm_per_rad": dict(_ESTIMATE)}
+    node = point
+    for key in path[:-1]:
+        node = node[key]
+    node[path[-1]] = value
+    return json.dumps({**WALKING, "timing_points": [point], "warnings": ["a doubt"]}).encode()
+
+
+def valid_walking(folder: Path) -> Path:
+    """A results directory holding :data:`TIMING_POINT` in a walking ``results.json``."""
+    (folder / "w").mkdir()
+    document = {**WALKING, "timing_points": [TIMING_POINT]}
+    (folder / "w" / "results.json").write_text(json.dumps(document))
+    return folder / "w"
+
+
+TIMING_POINT_VALUES = st.tuples(
+    st.sampled_from(TIMING_POINT_PATHS),
+    JSON_VALUES | st.sampled_from([[1.0], [1.0, "x"], [1.0, 2.0, 3.0], "plantar", 1e308]),
+).map(walking_document)
 INTEGERS_ABOVE = st.integers(2, 10**30).map(str)
 
 
@@ -362,6 +409,8 @@ SLOTS = [
     Slot("report friction.json", files(json_documents(FRICTION)),
          file_slot("friction.json", lambda w, p, f: ["report", f, "--out", f / "r.html"])),
     Slot("report results.json", files(json_documents(WALKING)),
+         file_slot("results.json", lambda w, p, f: ["report", f, "--out", f / "r.html"])),
+    Slot("report timing point", TIMING_POINT_VALUES.map(lambda b: Bad("file", b)),
          file_slot("results.json", lambda w, p, f: ["report", f, "--out", f / "r.html"])),
     Slot("report figure", st.sampled_from([Bad("fifo"), Bad("link-out"), Bad("directory")]),
          lambda w, bad, f: report_with_figure(w, bad, f)),
@@ -431,6 +480,9 @@ def test_bad_input_ends_in_one_error_line(world, data, monkeypatch, capsys):
     if slot.name == "report figure":  # refused with a warning; the rest of the report is fine
         assert code == 0 and "not embedded" in err, (args, err)
         return
+    if slot.name == "report timing point" and code == 0:  # a value the schema allows
+        assert (args[-1]).is_file(), (args, err)
+        return
     errors = [line for line in err.splitlines() if line.startswith("error: ")]
     assert code == 2 and len(errors) == 1, (args, code, err)
     event(f"ends: {errors[0].split(':')[-1].strip()[:40]}")
@@ -442,6 +494,7 @@ def test_every_slot_corrupts_a_command_that_otherwise_runs(world, monkeypatch, c
     for args in (
         [*filters_base(world, folder)],
         ["report", world.results, "--out", folder / "r.html"],
+        ["report", valid_walking(folder), "--out", folder / "w.html"],
         ["platform", "check", "perturberator", platform_file("perturberator")],
         ["session", "info", world.session],
     ):

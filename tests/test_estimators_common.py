@@ -1,15 +1,17 @@
 """One suite over every estimator in anklelab.ident (STYLE.md item 2, scikit-learn's shape).
 
 Each case builds a small problem the estimator can solve. The suite checks the contract: the
-constructor only stores parameters (they are checked in ``fit``), ``predict`` before ``fit``
-raises NotFittedError naming the class, ``fit`` returns self, leaves the parameters alone and
-adds only attributes ending in ``_``, and ``score`` is the VAF (%) of ``predict`` against the
-data it is given.
+constructor takes keyword arguments only and only stores them (they are checked in ``fit``, with
+one message shape: ``name: expected ..., got ...``), ``get_params`` returns them so that
+``sklearn.base.clone`` works, ``predict`` before ``fit`` raises NotFittedError naming the class,
+``fit`` returns self, leaves the parameters alone and adds only attributes ending in ``_``, and
+``score`` is the VAF (%) of ``predict`` against the data it is given.
 """
 
 from __future__ import annotations
 
 import inspect
+import re
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
@@ -80,14 +82,13 @@ def impedance_model() -> Case:
 
 def friction_identifier() -> Case:
     data = simulate_ident(protocol=IdentProtocol(speeds_rad_s=(20.0, 40.0), chirp_s=5.0), seed=2)
-    chirp, fs = data.chirp[0], data.sample_rate_hz
+    chirp = data.chirp[0]
     return Case(
         ident.FrictionIdentifier,
         (data,),
-        (chirp.torque_nm, fs),
+        (chirp.torque_nm,),
         chirp.velocity_rad_s,
         {"window_s": 0.0},
-        score=lambda est, y: est.score(chirp.torque_nm, y, fs),
     )
 
 
@@ -139,9 +140,33 @@ def test_fit_returns_self_and_adds_only_trailing_underscore_attributes(case):
 
 def test_parameters_are_checked_in_fit_not_in_the_constructor(case):
     estimator = case.make(**case.bad_params)  # storing a bad value is allowed
-    (name,) = case.bad_params
-    with pytest.raises(ParameterError, match=name):
+    ((name, value),) = case.bad_params.items()
+    with pytest.raises(
+        ParameterError, match=rf"^{name}: expected .+, got {re.escape(repr(value))}$"
+    ):
         fit(case, estimator)
+
+
+def test_constructors_take_keywords_only(case):
+    estimator = case.make()
+    parameters = inspect.signature(type(estimator).__init__).parameters.values()
+    assert [p.kind for p in parameters][1:] == [inspect.Parameter.KEYWORD_ONLY] * (
+        len(parameters) - 1
+    )
+    assert set(estimator.get_params()) == {p.name for p in parameters} - {"self"}
+
+
+def test_sklearn_clone_copies_the_parameters_not_the_fit(case):
+    base = pytest.importorskip("sklearn.base")
+    estimator = fit(case, case.make())
+    copy = base.clone(estimator)
+    assert type(copy) is type(estimator) and copy is not estimator
+    assert copy.get_params() == estimator.get_params()
+    assert not [k for k in vars(copy) if k.endswith("_")]
+    with pytest.raises(NotFittedError, match=type(estimator).__name__):
+        copy.predict(*case.x)
+    name, value = next(iter(case.bad_params.items()))
+    assert base.clone(copy.set_params(**{name: value})).get_params()[name] == value
 
 
 def test_score_is_the_vaf_of_predict_on_the_fitting_data(case):

@@ -140,7 +140,7 @@ def test_recovers_an_independently_generated_session(tmp_path):
 
 def test_predict_before_fit_names_the_class():
     with pytest.raises(NotFittedError, match="FrictionIdentifier is not fitted"):
-        FrictionIdentifier().predict(np.zeros(10), 1000.0)
+        FrictionIdentifier().predict(np.zeros(10))
 
 
 def test_friction_json_round_trip(tmp_path):

@@ -139,7 +139,7 @@ def test_linear_model_over_windows_and_repetitions_matches_separate_fits():
 
 def test_linear_model_estimator_and_model_torque():
     kin, torque, _, _ = _rising()
-    model = ImpedanceModel("linear", fs=FS).fit(kin[:, :100], torque[:100])
+    model = ImpedanceModel(stiffness_model="linear").fit(kin[:, :100], torque[:100], fs=FS)
     assert model.stiffness_slope_ == pytest.approx(K1)
     assert np.allclose(model.predict(kin[:, :100]), torque[:100])
     assert model.score(kin[:, :100], torque[:100]) == pytest.approx(100.0)
@@ -148,6 +148,6 @@ def test_linear_model_estimator_and_model_torque():
     with pytest.raises(ParameterError, match="fs"):
         impedance_torque(fit, kin[:, :100])
     with pytest.raises(ParameterError, match="fs"):
-        ImpedanceModel("linear").fit(kin[:, :100], torque[:100])
+        ImpedanceModel(stiffness_model="linear").fit(kin[:, :100], torque[:100])
     with pytest.raises(ParameterError, match="stiffness_model"):
         fit_impedance(kin, torque, stiffness_model="quadratic")  # type: ignore[arg-type]

@@ -40,7 +40,7 @@ def test_recovers_known_multi_input_filters_from_white_inputs(method):
     irf = _known_irf()
     u = rng.normal(size=(2, 20000))
     y = _simulate(u, irf) + rng.normal(0, 0.05, (3, 20000))
-    est = ImpulseResponse(30, method=method).fit(u, y)
+    est = ImpulseResponse(n_lags=30, method=method).fit(u, y)
     assert est.irf_.shape == irf.shape
     assert np.max(np.abs(est.irf_ - irf)) < 0.02 * np.max(np.abs(irf))
     assert est.score(u, y) > 99.0
@@ -51,7 +51,7 @@ def test_single_input_toeplitz_is_levinson_and_matches_least_squares():
     irf = _known_irf(n_out=4, n_in=1, n_lags=20)
     u = lfilter([1.0], [1.0, -0.8], rng.normal(size=5000))[None]  # coloured input
     y = _simulate(u, irf) + rng.normal(0, 0.1, (4, 5000))
-    est = ImpulseResponse(20, method="toeplitz").fit(u, y)
+    est = ImpulseResponse(n_lags=20, method="toeplitz").fit(u, y)
     # reference: ordinary least squares on the lagged (Hankel) data matrix, demeaned
     uc, yc = u[0] - u[0].mean(), y - y.mean(axis=1, keepdims=True)
     lagged = np.stack([np.concatenate([np.zeros(k), uc[: uc.size - k]]) for k in range(20)], axis=1)
@@ -64,7 +64,7 @@ def test_records_are_pooled():
     irf = _known_irf(n_out=2, n_in=1, n_lags=15)
     u = rng.normal(size=(4, 1, 3000))
     y = _simulate(u, irf)
-    est = ImpulseResponse(15, method="toeplitz").fit(u, y)
+    est = ImpulseResponse(n_lags=15, method="toeplitz").fit(u, y)
     assert np.allclose(est.irf_, irf, atol=0.02)
     assert est.predict(u).shape == (4, 2, 3000)
 
@@ -78,8 +78,8 @@ def test_pinv_selects_an_order_for_a_low_pass_input_and_beats_the_direct_solutio
     fit_u, test_u = (lowpass(rng.normal(size=(1, 20000)), FS, 20.0) for _ in range(2))
     noise = lambda: rng.normal(0, 0.02, (1, 20000))  # noqa: E731
     fit_y, test_y = _simulate(fit_u, irf) + noise(), _simulate(test_u, irf) + noise()
-    pinv = ImpulseResponse(n_lags).fit(fit_u, fit_y)
-    direct = ImpulseResponse(n_lags, method="toeplitz").fit(fit_u, fit_y)
+    pinv = ImpulseResponse(n_lags=n_lags).fit(fit_u, fit_y)
+    direct = ImpulseResponse(n_lags=n_lags, method="toeplitz").fit(fit_u, fit_y)
     assert 5 < pinv.order_ < n_lags
     assert pinv.score(test_u, test_y) >= direct.score(test_u, test_y) - 0.01
     assert pinv.score(test_u, test_y) > 98.0
@@ -87,7 +87,7 @@ def test_pinv_selects_an_order_for_a_low_pass_input_and_beats_the_direct_solutio
     # transient, where the zero initial condition is a step the input never contains)
     error = pinv.predict(test_u) - _simulate(test_u, irf)
     assert np.max(np.abs(error[:, n_lags:])) < 0.01 * test_y.std()
-    forced = ImpulseResponse(n_lags, order=3).fit(fit_u, fit_y)
+    forced = ImpulseResponse(n_lags=n_lags, order=3).fit(fit_u, fit_y)
     assert forced.order_ == 3
 
 
@@ -99,7 +99,7 @@ def test_per_input_lengths_match_least_squares_on_the_shorter_design():
     irf = _known_irf(n_out=3, n_in=2, n_lags=20)
     irf[:, 0, 1:] = 0.0
     y = _simulate(u, irf) + rng.normal(0, 0.1, (3, 6000))
-    est = ImpulseResponse([1, 20], method="toeplitz").fit(u, y)
+    est = ImpulseResponse(n_lags=[1, 20], method="toeplitz").fit(u, y)
     assert est.irf_.shape == (3, 2, 20) and est.order_ == 21
     assert np.all(est.irf_[:, 0, 1:] == 0.0)
     uc, yc = u - u.mean(axis=1, keepdims=True), y - y.mean(axis=1, keepdims=True)
@@ -109,9 +109,9 @@ def test_per_input_lengths_match_least_squares_on_the_shorter_design():
     assert np.allclose(est.irf_[:, 1], ols[:, 1:], atol=5e-3)
     assert np.allclose(est.irf_, irf, atol=0.05)
     with pytest.raises(ParameterError, match="one per input"):
-        ImpulseResponse([1, 20, 5]).fit(u, y)
+        ImpulseResponse(n_lags=[1, 20, 5]).fit(u, y)
     with pytest.raises(ParameterError, match="n_lags"):
-        ImpulseResponse([1, 0]).fit(u, y)
+        ImpulseResponse(n_lags=[1, 0]).fit(u, y)
 
 
 def test_not_fitted_and_bad_parameters():
@@ -120,9 +120,9 @@ def test_not_fitted_and_bad_parameters():
     with pytest.raises(ParameterError, match="method"):
         ImpulseResponse(method="fft").fit(np.ones((1, 10)), np.ones((1, 10)))
     with pytest.raises(ParameterError, match="constant"):
-        ImpulseResponse(5).fit(np.ones((1, 50)), np.ones((1, 50)))
+        ImpulseResponse(n_lags=5).fit(np.ones((1, 50)), np.ones((1, 50)))
     with pytest.raises(ParameterError, match="n_times must match"):
-        ImpulseResponse(5).fit(np.ones((1, 50)), np.ones((1, 40)))
+        ImpulseResponse(n_lags=5).fit(np.ones((1, 50)), np.ones((1, 40)))
     with pytest.raises(NotFittedError, match="PlatformFilters"):
         PlatformFilters().predict(np.zeros(100))
 
@@ -173,7 +173,7 @@ def calibration():
 def test_platform_filters_angle_pathway_captures_gravity(calibration):
     angles, forces = calibration
     both = PlatformFilters().fit(angles[0], forces[0], fs=FS)
-    acc_only = PlatformFilters(("acceleration",)).fit(angles[0], forces[0], fs=FS)
+    acc_only = PlatformFilters(inputs=("acceleration",)).fit(angles[0], forces[0], fs=FS)
     pooled, by_channel = both.vaf(np.stack(angles[1:]), np.stack(forces[1:]))
     assert pooled.shape == (2,) and by_channel.shape == (2, 8)
     assert np.all(pooled > 97.0)
@@ -221,7 +221,7 @@ def test_platform_filters_recover_the_physical_pathways(calibration):
 
 def test_platform_filters_save_and_load_round_trip(calibration, tmp_path):
     angles, forces = calibration
-    filters = PlatformFilters(("angle", "velocity", "acceleration"), n_lags=50).fit(
+    filters = PlatformFilters(inputs=("angle", "velocity", "acceleration"), n_lags=50).fit(
         angles[0], forces[0], fs=FS
     )
     path = filters.save(tmp_path / "filters.json", calibration_vaf_percent=[99.0])
@@ -244,7 +244,7 @@ def test_platform_filters_bad_file_names_the_key(tmp_path):
     with pytest.raises(ParameterError, match="not found"):
         PlatformFilters.load(tmp_path / "missing.json")
     with pytest.raises(ParameterError, match="inputs"):
-        PlatformFilters(("jerk",)).fit(np.zeros(100), np.zeros((8, 100)), fs=FS)
+        PlatformFilters(inputs=("jerk",)).fit(np.zeros(100), np.zeros((8, 100)), fs=FS)
     with pytest.raises(ParameterError, match="angle_lags"):
         PlatformFilters(angle_lags=0).fit(np.zeros(100), np.zeros((8, 100)), fs=FS)
 

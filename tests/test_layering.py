@@ -24,6 +24,7 @@ RANK = {
     "_version": 0,
     "errors": 0,
     "forceplate": 0,
+    "metrics": 0,
     "platforms": 1,
     "sim": 2,
     "control": 3,
@@ -33,8 +34,9 @@ RANK = {
     "ident": 6,
     "pipelines": 7,
     "report": 8,
-    "commands": 9,
-    "cli": 10,
+    "demo": 9,  # an application of every layer above (the twins, analyses, report rendering)
+    "commands": 10,
+    "cli": 11,
 }
 # the twin produces sessions; the session layer and the analysis layers only read them
 FORBIDDEN = {("data", "experiments"), ("signals", "experiments"), ("ident", "experiments")}

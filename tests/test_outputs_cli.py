@@ -16,6 +16,7 @@ from anklelab._lock import output_lock
 from anklelab._runs import RUN_FILE, RunManifest, sha256_file
 from anklelab.data import load_session, save_session
 from anklelab.data._synthetic import random_session
+from anklelab.report.sections import WALKING_FIGURES
 
 
 def anklelab(monkeypatch, capsys, *args):
@@ -250,7 +251,7 @@ def test_analysis_output_is_one_run_and_report_shows_only_it(twin, tmp_path, mon
     out = tmp_path / "o"
     base = ["analyze", session, "--out", out, "--settings", settings]
     assert anklelab(monkeypatch, capsys, *base)[0] == 0
-    assert len(list(out.glob("*.png"))) == 4
+    assert len(list(out.glob("*.png"))) == len(WALKING_FIGURES)
     code, _, err = anklelab(monkeypatch, capsys, *base, "--no-figures", "--seed", "9")
     assert code == 2 and "already exists; pass --force" in one_error(err)
     assert anklelab(monkeypatch, capsys, *base, "--no-figures", "--seed", "9", "--force")[0] == 0

@@ -633,7 +633,13 @@ def test_cli_identify_then_analyze_writes_results_table_and_figures(tmp_path):
     assert rows[0].startswith("delay_ms,direction,n_perturbed") and len(rows) == 3
     trials = (out / "trials.csv").read_text().splitlines()
     assert len(trials) == 1 + len(mini.session.walking)
-    for name in ("filters", "stance_profiles", "model_fit", "stiffness_vs_lever_arm"):
+    for name in (
+        "impedance_summary",
+        "impedance_vs_lever_arm",
+        "filters",
+        "stance_profiles",
+        "model_fit",
+    ):
         assert (out / f"{name}.png").read_bytes()[:4] == b"\x89PNG"
 
 

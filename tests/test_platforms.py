@@ -127,3 +127,44 @@ def test_replace_validates_and_keeps_other_sources():
     assert q.sources["capstan.ratio"] == p.sources["capstan.ratio"]
     with pytest.raises(ParameterError, match="greater than 0"):
         p.replace({"gearhead.ratio": 0.0})
+
+
+def test_platform_show_never_cuts_a_parameter_name_at_80_columns():
+    import os
+    import subprocess
+    import sys
+
+    from anklelab._params import dotted_leaves
+    from anklelab.platforms import load_platform
+
+    proc = subprocess.run(
+        [
+            sys.executable,
+            "-c",
+            "from anklelab.cli import run; run()",
+            "platform",
+            "show",
+            "capstan",
+        ],
+        capture_output=True,
+        text=True,
+        env={**os.environ, "COLUMNS": "80"},
+        check=True,
+    )
+    names = dotted_leaves(load_platform("capstan").model_dump())
+    assert max(map(len, names)) > 30
+    assert all(f" {name} " in proc.stdout for name in names)
+
+
+def test_hints_point_at_a_valid_name_never_the_users_own(tmp_path):
+    from anklelab._params import did_you_mean, found_instead
+    from anklelab.pipelines import load_walking_settings
+
+    assert did_you_mean("fz_4", ["fz4"]) == " (did you mean 'fz4'?)"
+    assert found_instead("fz4", ["fz_4"]) == " (found 'fz_4': rename it to 'fz4')"
+    settings = tmp_path / "settings.toml"
+    settings.write_text("lowpass_hz = 15.0\n")
+    with pytest.raises(
+        ParameterError, match=r"lowpass_hz: unknown key \(did you mean 'cutoff_hz'\?\)"
+    ):
+        load_walking_settings(settings)

@@ -55,10 +55,21 @@ def test_report_of_an_analyze_output_renders_in_chromium(analysed):
     )
     assert f"<td>{first['direction']}/{first['delay_ms']:g}</td>" in page and cell in page
     assert "Testing machine (bench)" in page and "Figures not found" not in page
+    assert f"<h1>Walking impedance: {document['session']}</h1>" in page
+    assert "session SHA-256" in page and document["session_sha256"] in page
     seen = view(analysed / "report.html", "report_cli_walking.png")
     assert seen.console_errors == []
     assert [img["alt"] for img in seen.images] == [title for _, title, _ in WALKING_FIGURES]
     assert all(img["complete"] and img["width"] > 0 and img["height"] > 0 for img in seen.images)
+    # laid out as a reader needs it: the key figure on the first screen, every figure at its
+    # own size (none shrunk, none wider than the page), nothing overlapping, no code names
+    key = seen.images[0]["box"]
+    assert key["y"] + key["h"] < 900
+    for img in seen.images:
+        assert img["box"]["w"] == pytest.approx(img["width"], abs=1), img
+    assert seen.page_width <= 1400 and seen.overlapping_images() == []
+    assert not re.findall(r"\b[a-z]+_[a-z0-9_]+\b", seen.text), "code names on the page"
+    assert "settings: seed=" not in seen.text and "anklelab report:" not in seen.text
 
 
 def test_report_of_a_friction_output_to_another_file(identified, tmp_path):
@@ -161,9 +172,10 @@ def test_report_never_embeds_what_a_figure_path_points_at(analysed, tmp_path):
         "not embedded",
     ]
     figures = embedded(path.read_text())
-    assert len(figures) == 2 and all(b"root:secret" not in png for png in figures)
+    assert len(figures) == 3 and all(b"root:secret" not in png for png in figures)
     assert figures == [
-        (out / f"{n}.png").read_bytes() for n in ("stance_profiles", "stiffness_vs_lever_arm")
+        (out / f"{n}.png").read_bytes()
+        for n in ("impedance_summary", "impedance_vs_lever_arm", "stance_profiles")
     ]
     assert "Figures not embedded: " in path.read_text()
 
@@ -180,7 +192,7 @@ def test_directory_without_manifest_embeds_only_regular_png_files(analysed, tmp_
         f"{out}/filters.png: not a PNG image; not embedded",
         f"{out}/model_fit.png: a symbolic link; expected a regular file; not embedded",
     ]
-    assert len(embedded(path.read_text())) == 2
+    assert len(embedded(path.read_text())) == 3
 
 
 @pytest.mark.parametrize(

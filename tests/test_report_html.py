@@ -1,17 +1,15 @@
 """The self-contained HTML report, checked in a real headless browser."""
 
-import matplotlib
-
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt
 import numpy as np
+from matplotlib.figure import Figure as MplFigure
 
 from anklelab.report import Figure, Section, Table, figure_png, write_report
 from tests.browser import view
 
 
 def sample_report(tmp_path):
-    fig, ax = plt.subplots()
+    fig = MplFigure()
+    ax = fig.subplots()
     t = np.linspace(0, 1, 200)
     ax.plot(t, np.sin(2 * np.pi * 3 * t))
     sections = [

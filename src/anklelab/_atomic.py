@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import errno
 import hashlib
+import json
 import os
 import re
 import secrets
@@ -23,6 +24,7 @@ import socket
 from collections.abc import Iterator
 from contextlib import contextmanager, suppress
 from pathlib import Path
+from typing import Any
 
 __all__ = [
     "atomic_directory",
@@ -31,6 +33,7 @@ __all__ = [
     "reap_temporaries",
     "untemporary",
     "write_bytes_atomic",
+    "write_json_atomic",
     "write_text_atomic",
 ]
 
@@ -236,3 +239,12 @@ def write_bytes_atomic(
 def write_text_atomic(path: str | os.PathLike[str], text: str, *, overwrite: bool = True) -> Path:
     """:func:`write_bytes_atomic` for UTF-8 text."""
     return write_bytes_atomic(path, text.encode("utf-8"), overwrite=overwrite)
+
+
+def write_json_atomic(
+    path: str | os.PathLike[str], document: Any, *, overwrite: bool = True
+) -> Path:
+    """:func:`write_text_atomic` for ``document`` as indented JSON with a final newline;
+    numpy scalars are written as numbers."""
+    text = json.dumps(document, indent=2, default=float) + "\n"
+    return write_text_atomic(path, text, overwrite=overwrite)

@@ -24,8 +24,11 @@ from anklelab.errors import ParameterError
 
 __all__ = [
     "SOURCE_KINDS",
+    "SYNONYMS",
     "Parameters",
     "did_you_mean",
+    "dotted_leaves",
+    "found_instead",
     "load_parameters",
     "parameters_from_mapping",
     "read_parameter_document",
@@ -78,18 +81,42 @@ class Parameters(BaseModel):
         return changed
 
 
-def did_you_mean(key: str, options: Iterable[str]) -> str:
-    """A hint naming the option closest to ``key`` (``""`` if none is close).
+SYNONYMS = {
+    "lowpass_hz": "cutoff_hz",
+    "low_pass_hz": "cutoff_hz",
+    "cutoff": "cutoff_hz",
+    "cut_off_hz": "cutoff_hz",
+    "fs": "sample_rate_hz",
+    "fs_hz": "sample_rate_hz",
+    "sampling_rate_hz": "sample_rate_hz",
+    "sample_rate": "sample_rate_hz",
+    "window": "window_ms",
+    "n_bootstrap": "bootstrap_reps",
+    "bootstrap": "bootstrap_reps",
+    "random_state": "seed",
+}
+"""Names users write for a setting that anklelab spells otherwise (other tools' words)."""
 
-    Names are case-sensitive, but a case slip is the likeliest typo, so an option that differs
-    from ``key`` only in case is named first, and said to be one.
 
-    >>> did_you_mean("fz4", ["fz1", "fz3", "Fz4"])
-    " ('Fz4' differs from 'fz4' only in case; names are case-sensitive)"
+def did_you_mean(given: str, valid: Iterable[str]) -> str:
+    """A hint naming the valid name closest to the name the user ``given`` (``""`` if none).
+
+    ``valid`` are the names anklelab accepts: the hint always names one of them, never the
+    user's own spelling. Names are case-sensitive, but a case slip is the likeliest typo, so a
+    valid name that differs only in case is named first, and said to be one; a known synonym
+    (:data:`SYNONYMS`, e.g. ``lowpass_hz`` for ``cutoff_hz``) comes next.
+
+    >>> did_you_mean("Fz4", ["fz1", "fz3", "fz4"])
+    " ('fz4' differs from 'Fz4' only in case; names are case-sensitive)"
     >>> did_you_mean("fz_3", ["fz1", "fz3"])
     " (did you mean 'fz3'?)"
+    >>> did_you_mean("lowpass_hz", ["cutoff_hz", "filter_order"])
+    " (did you mean 'cutoff_hz'?)"
     """
-    options = list(options)
+    options = list(valid)
+    key = given
+    if SYNONYMS.get(key) in options and key.casefold() not in map(str.casefold, options):
+        return f" (did you mean {SYNONYMS[key]!r}?)"
     folded = [option.casefold() for option in options]
     close = difflib.get_close_matches(key.casefold(), folded, n=1)
     if not close:
@@ -98,6 +125,43 @@ def did_you_mean(key: str, options: Iterable[str]) -> str:
     if close[0] == key.casefold():
         return f" ({match!r} differs from {key!r} only in case; names are case-sensitive)"
     return f" (did you mean {match!r}?)"
+
+
+def found_instead(required: str, present: Iterable[str]) -> str:
+    """A hint for a required name that is missing: the present name that looks like it.
+
+    The hint points at the name to write (``required``), never offers the user's spelling as
+    the answer.
+
+    >>> found_instead("fz4", ["fz1", "fz_4"])
+    " (found 'fz_4': rename it to 'fz4')"
+    >>> found_instead("fz4", ["Fz4"])
+    " (found 'Fz4': rename it to 'fz4'; names are case-sensitive)"
+    """
+    present = list(present)
+    folded = [name.casefold() for name in present]
+    synonym = [name for name in present if SYNONYMS.get(name) == required]
+    close = synonym or [
+        present[folded.index(m)]
+        for m in difflib.get_close_matches(required.casefold(), folded, n=1)
+    ]
+    if not close:
+        return ""
+    case = "; names are case-sensitive" if close[0].casefold() == required.casefold() else ""
+    return f" (found {close[0]!r}: rename it to {required!r}{case})"
+
+
+def dotted_leaves(tree: Mapping[str, Any], prefix: str = "") -> dict[str, Any]:
+    """The leaves of a nested mapping by dotted key.
+
+    >>> dotted_leaves({"motor": {"kt": 0.1, "poles": 8}, "name": "x"})
+    {'motor.kt': 0.1, 'motor.poles': 8, 'name': 'x'}
+    """
+    leaves: dict[str, Any] = {}
+    for key, value in tree.items():
+        dotted = f"{prefix}.{key}" if prefix else str(key)
+        leaves |= dotted_leaves(value, dotted) if isinstance(value, Mapping) else {dotted: value}
+    return leaves
 
 
 def _split_sources(node: Any, prefix: str, sources: dict[str, str], origin: str) -> Any:

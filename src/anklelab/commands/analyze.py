@@ -23,7 +23,7 @@ from anklelab.commands._options import (
     SettingsOption,
     session_input,
 )
-from anklelab.commands._progress import recording_progress
+from anklelab.commands._progress_bars import recording_progress
 
 if TYPE_CHECKING:
     from anklelab.data.session import Session

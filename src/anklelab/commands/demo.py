@@ -13,27 +13,35 @@ from rich.markup import escape
 from rich.table import Table
 
 from anklelab.commands._options import ForceOption, SeedOption
-from anklelab.commands._progress import recording_progress
+from anklelab.commands._progress_bars import recording_progress
 
 if TYPE_CHECKING:
-    from anklelab.report.comparisons import Comparison
+    from anklelab.demo.comparisons import Comparison
 
 __all__ = ["demo"]
 
 
-def _table(title: str, rows: Sequence[Comparison]) -> Table:
-    """Rows under a bold heading per group; numbers never wrap."""
-    from anklelab.report.comparisons import COLUMNS, grouped
+def _table(title: str, rows: Sequence[Comparison]) -> tuple[Table, list[str]]:
+    """Rows under a bold heading per group; numbers never wrap. The last column refers to
+    numbered notes (returned), which say why a value departs from the paper or how it misses."""
+    from anklelab.demo.comparisons import COLUMNS, grouped
 
     table = Table(title=title, box=box.SIMPLE_HEAD, title_justify="left", title_style="bold")
     for k, column in enumerate(COLUMNS):
         table.add_column(column, justify="left" if k == 0 else "right", no_wrap=k > 1)
+    notes: list[str] = []
     for group, members in grouped(rows).items():
         table.add_row(f"[bold]{group}[/bold]", end_section=False)
         for row in members:
-            table.add_row(*(escape(cell) for cell in row.cells()))
+            *cells, _ = row.cells()
+            mark = ""
+            if row.remark:
+                if row.remark not in notes:
+                    notes.append(row.remark)
+                mark = f"{'miss ' if row.miss else ''}[{notes.index(row.remark) + 1}]"
+            table.add_row(*(escape(cell) for cell in cells), escape(mark))
         table.add_section()
-    return table
+    return table, [f"[{i}] {note}" for i, note in enumerate(notes, start=1)]
 
 
 def demo(
@@ -56,8 +64,7 @@ def demo(
     measured and the twin's truth.
     """
     from anklelab.commands._files import output_directory
-    from anklelab.pipelines.demo import DemoSettings, run_capstan, run_perturberator
-    from anklelab.report.demo import write_demo_report
+    from anklelab.demo import DemoSettings, run_capstan, run_perturberator, write_demo_report
 
     settings = DemoSettings.quick(seed) if quick else DemoSettings(seed=seed)
     with (
@@ -75,8 +82,14 @@ def demo(
     console = Console()
     if not console.is_terminal:  # a log file or pipe: wide enough for the tables not to wrap
         console = Console(width=120)
-    console.print(_table("Paper 000, the Perturberator", comparisons["paper_000"]))
-    console.print(_table("Paper 001, the capstan platform", comparisons["paper_001"]))
+    for title, paper in (
+        ("Paper 000, the Perturberator", "paper_000"),
+        ("Paper 001, the capstan platform", "paper_001"),
+    ):
+        table, notes = _table(title, comparisons[paper])
+        console.print(table)
+        for note in notes:
+            console.print(note, markup=False, highlight=False)
     console.print(
         f"Sessions and results in {out}/ (perturberator/, capstan/); "
         f"all values in {out / summary.name}; open {out / report.name} in a browser."

@@ -10,7 +10,7 @@ import typer
 from rich.console import Console
 from rich.table import Table
 
-from anklelab._atomic import write_text_atomic
+from anklelab._atomic import write_json_atomic
 from anklelab.commands._options import (
     ForceOption,
     SessionArgument,
@@ -18,7 +18,7 @@ from anklelab.commands._options import (
     finite,
     session_input,
 )
-from anklelab.commands._progress import recording_progress
+from anklelab.commands._progress_bars import recording_progress
 
 app = typer.Typer(help="Identify platform models from recorded data.", no_args_is_help=True)
 
@@ -146,8 +146,7 @@ def friction(
     OUT/friction.json, with --figures the spin-down, chirp and friction-map plots, and
     OUT/run.json (the record of the run). OUT is written whole or not at all.
     """
-    import json
-
+    from anklelab._params import dotted_leaves
     from anklelab.commands._files import check_input, output_directory
     from anklelab.data import session_hash
     from anklelab.data.capstan_ident import read_ident_directory
@@ -170,7 +169,7 @@ def friction(
         ).fit(data)
         progress(2, 2)
         result = model.to_dict()
-        write_text_atomic(run.directory / "friction.json", json.dumps(result, indent=2) + "\n")
+        write_json_atomic(run.directory / "friction.json", result)
         if figures:
             from anklelab.report.figures_capstan import friction_figures
 
@@ -185,8 +184,8 @@ def friction(
     table = Table(title=f"pinion-shaft friction and inertia from {ident_dir}")
     for column in ("parameter", "identified", *(("truth", "error %") if data.truth else ())):
         table.add_column(column, justify="right" if column != "parameter" else "left")
-    flat = _leaves(result)
-    truth = _leaves(data.truth) if data.truth else {}
+    flat = dotted_leaves(result)
+    truth = dotted_leaves(data.truth) if data.truth else {}
     for key, value in flat.items():
         if key.startswith("fit."):
             continue
@@ -200,14 +199,3 @@ def friction(
         f"spin-down VAF {model.spindown_vaf_percent_:.2f} %, chirp VAF "
         f"{model.chirp_vaf_percent_:.2f} %; written to {out / 'friction.json'}"
     )
-
-
-def _leaves(tree: dict, prefix: str = "") -> dict[str, float]:
-    out: dict[str, float] = {}
-    for key, value in tree.items():
-        name = f"{prefix}{key}"
-        if isinstance(value, dict):
-            out |= _leaves(value, f"{name}.")
-        else:
-            out[name] = value
-    return out

@@ -8,7 +8,7 @@ from typing import Annotated
 import typer
 
 from anklelab.commands._options import ForceOption, session_input
-from anklelab.commands._progress import recording_progress
+from anklelab.commands._progress_bars import recording_progress
 
 
 def import_session(

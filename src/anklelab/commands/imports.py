@@ -14,7 +14,7 @@ import typer
 from typer.core import TyperGroup
 
 from anklelab.commands import importer
-from anklelab.commands._progress import recording_progress
+from anklelab.commands._progress_bars import recording_progress
 from anklelab.errors import AnklelabError
 
 if TYPE_CHECKING:

@@ -10,18 +10,11 @@ import typer
 from rich.console import Console
 from rich.table import Table
 
+from anklelab._params import dotted_leaves
 from anklelab.commands._options import ForceOption
 from anklelab.platforms import PLATFORMS, load_platform
 
 app = typer.Typer(help="Inspect platform parameter sets and their sources.", no_args_is_help=True)
-
-
-def _leaves(node: dict[str, Any], prefix: str = "") -> list[tuple[str, Any]]:
-    rows: list[tuple[str, Any]] = []
-    for key, value in node.items():
-        dotted = f"{prefix}.{key}" if prefix else key
-        rows += _leaves(value, dotted) if isinstance(value, dict) else [(dotted, value)]
-    return rows
 
 
 def _value(value: Any) -> str:
@@ -61,7 +54,7 @@ def platform_markdown(name: str, file: Path | None = None) -> str:
         model = type(getattr(params, section))
         lines += ["", f"## `{section}`", "", _summary(model), ""]
         lines += ["| parameter | value | source |", "| --- | --- | --- |"]
-        for key, value in _leaves(values, section):
+        for key, value in dotted_leaves(values, section).items():
             source = sources.get(key, "").replace("|", "\\|")
             lines.append(f"| `{key}` | {_value(value)} | {source} |")
     return "\n".join(lines) + "\n"
@@ -101,10 +94,13 @@ def show(
         typer.echo(platform_markdown(name.value, params), nl=False)
         return
     loaded = load_platform(name.value, params)
+    leaves = dotted_leaves(loaded.model_dump())
     table = Table(title=f"{name.value} parameters")
-    for column in ("parameter", "value", "source"):
-        table.add_column(column)
-    for key, value in _leaves(loaded.model_dump()):
+    # names and values are never cut, whatever the terminal's width: the sources wrap instead
+    table.add_column("parameter", no_wrap=True, min_width=max(map(len, leaves), default=9))
+    table.add_column("value", overflow="fold")
+    table.add_column("source")
+    for key, value in leaves.items():
         table.add_row(key, repr(value), loaded.sources.get(key, ""))
     Console().print(table)
 

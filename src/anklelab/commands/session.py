@@ -10,7 +10,7 @@ from rich.console import Console
 from rich.table import Table
 
 from anklelab.commands._options import SessionArgument, session_input
-from anklelab.commands._progress import recording_progress
+from anklelab.commands._progress_bars import recording_progress
 
 app = typer.Typer(help="Inspect sessions.", no_args_is_help=True)
 

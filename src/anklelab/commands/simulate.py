@@ -61,7 +61,7 @@ def capstan_ident(
     `anklelab identify friction`.
     """
     from anklelab.commands._files import output_directory
-    from anklelab.commands._progress import recording_progress
+    from anklelab.commands._progress_bars import recording_progress
     from anklelab.experiments.capstan_ident import (
         IdentProtocol,
         simulate_ident,
@@ -147,7 +147,7 @@ def perturberator(
     from contextlib import ExitStack
 
     from anklelab.commands._files import array_bytes, check_space, output_directory, output_file
-    from anklelab.commands._progress import recording_progress
+    from anklelab.commands._progress_bars import recording_progress
     from anklelab.data import save_session
     from anklelab.experiments.perturberator import simulate_perturberator
     from anklelab.platforms import load_platform

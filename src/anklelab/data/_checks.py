@@ -15,7 +15,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from anklelab._params import did_you_mean, parameters_from_mapping
+from anklelab._params import found_instead, parameters_from_mapping
 from anklelab.data._tree import canonical
 from anklelab.data.session import (
     BENCH_COLUMNS,
@@ -80,7 +80,7 @@ def _table(data: Mapping[str, Any], key: str, origin: str, prefix: str) -> dict[
     table = data.get(key)
     if table is None:
         raise SessionFormatError(
-            f"{origin}: {prefix}{key}: required table is missing{did_you_mean(key, data)}"
+            f"{origin}: {prefix}{key}: required table is missing{found_instead(key, data)}"
         )
     if not isinstance(table, Mapping):
         raise SessionFormatError(f"{origin}: {prefix}{key}: expected a table, got {table!r}")
@@ -145,7 +145,7 @@ def info_from_mapping(data: Mapping[str, Any], origin: str, prefix: str = "") ->
     for key in _GEOMETRY_KEYS:
         if key not in geometry:
             raise SessionFormatError(
-                f"{where}geometry.{key}: required key is missing{did_you_mean(key, geometry)}"
+                f"{where}geometry.{key}: required key is missing{found_instead(key, geometry)}"
             )
     ankle_height = _number(geometry, "ankle_height_m", f"{where}geometry.", positive=True)
     heel_to_ankle = _number(geometry, "heel_to_ankle_m", f"{where}geometry.", positive=False)
@@ -207,7 +207,7 @@ def check_columns(file: str, names: Iterable[str], required: tuple[str, ...], wh
         seen.add(name)
     missing = [name for name in required if name not in seen]
     if missing:
-        hints = "".join(did_you_mean(m, names) for m in missing)
+        hints = "".join(found_instead(m, names) for m in missing)
         raise SessionFormatError(
             f"{file}: missing required column(s) {', '.join(map(repr, missing))} in the {where}"
             f"{hints}; expected columns {', '.join(required)} (found {', '.join(names) or 'none'})"

@@ -29,7 +29,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import Any, ClassVar
 
 import numpy as np
 from numba import njit
@@ -40,9 +40,10 @@ from scipy.signal import savgol_filter
 
 from anklelab._params import parameters_from_mapping, read_parameter_document
 from anklelab.data.capstan_ident import IdentData, IdentRun
-from anklelab.errors import NotFittedError, ParameterError, SessionFormatError
+from anklelab.errors import ParameterError, SessionFormatError
+from anklelab.ident._base import Estimator, interval
+from anklelab.metrics import vaf
 from anklelab.platforms.capstan import FrictionParameters
-from anklelab.signals.metrics import vaf
 from anklelab.sim.capstan.friction import friction_array, friction_step, friction_torque
 
 __all__ = ["FrictionIdentifier", "SpindownFit", "read_friction_json"]
@@ -124,7 +125,7 @@ def _simulate_angle(torque, fs, law, inertia, w0, n_sub):  # type: ignore[no-unt
     return angle
 
 
-class FrictionIdentifier:
+class FrictionIdentifier(Estimator):
     """Identify ``J``, ``b`` and ``Tc`` (per direction), ``ws`` and ``Ts`` (scikit-learn style).
 
     Parameters
@@ -171,6 +172,9 @@ class FrictionIdentifier:
         Per-run fitted coasts.
     chirp_prediction_ : ndarray
         The model's velocity through the first chirp, rad/s.
+    fs_ : float
+        The identification data's sample rate, Hz (:meth:`predict` and :meth:`score` take
+        torques at this rate).
 
     Examples
     --------
@@ -179,6 +183,26 @@ class FrictionIdentifier:
     >>> round(model.inertia_kgm2_ / 7.54e-4, 2), round(model.coulomb_nm_["ccw"] / 0.038, 2)
     (1.0, 1.0)
     """
+
+    _parameter_constraints: ClassVar = {
+        **{
+            name: [interval(0, closed="neither")]
+            for name in (
+                "min_speed_rad_s",
+                "window_s",
+                "chirp_min_speed_rad_s",
+                "derivative_window_s",
+                "low_speed_floor_rad_s",
+                "tail_s",
+                "stribeck_exponent",
+            )
+        },
+        "skip_s": [interval(0)],
+        "zero_torque_nm": [interval(0)],
+        "substeps": [interval(1, integer=True)],
+        "iterations": [interval(1, integer=True)],
+    }
+    _fitted_attribute: ClassVar = "stribeck_velocity_rad_s_"
 
     def __init__(
         self,
@@ -208,30 +232,10 @@ class FrictionIdentifier:
         self.iterations = iterations
 
     # ------------------------------------------------------------------------- fitting
-    def _check(self) -> None:
-        for name, low, strict in (
-            ("min_speed_rad_s", 0, True),
-            ("skip_s", 0, False),
-            ("window_s", 0, True),
-            ("chirp_min_speed_rad_s", 0, True),
-            ("derivative_window_s", 0, True),
-            ("low_speed_floor_rad_s", 0, True),
-            ("zero_torque_nm", 0, False),
-            ("tail_s", 0, True),
-            ("stribeck_exponent", 0, True),
-            ("substeps", 1, False),
-            ("iterations", 1, False),
-        ):
-            value = getattr(self, name)
-            if not (value > low if strict else value >= low):
-                raise ParameterError(
-                    f"{name}: expected a number {'>' if strict else '>='} {low}, got {value!r}"
-                )
-
     def fit(self, data: IdentData) -> FrictionIdentifier:
         """Fit every parameter from an identification session (see the module docstring)."""
-        self._check()
-        fs = data.sample_rate_hz
+        self._validate_params()
+        fs = self.fs_ = data.sample_rate_hz
         min_speed = self.min_speed_rad_s
         for _ in range(2):  # once more if the Stribeck velocity reaches into the fitted coasts
             skip = round(self.skip_s * fs)
@@ -245,7 +249,7 @@ class FrictionIdentifier:
             if min_speed >= 3.5 * ws:
                 break
             min_speed = 3.5 * ws
-        predictions = [self.predict(run.torque_nm, fs) for run in data.chirp]
+        predictions = [self.predict(run.torque_nm) for run in data.chirp]
         self.chirp_prediction_ = predictions[0]
         self.chirp_vaf_percent_ = float(  # pooled over every chirp
             vaf(np.concatenate([r.velocity_rad_s for r in data.chirp]), np.concatenate(predictions))
@@ -411,19 +415,21 @@ class FrictionIdentifier:
                 segments.append((tau[begin : fast[0]], v[begin : fast[0]], None))
         return segments
 
-    def _law(self, ts: float, ws: float) -> NDArray[np.float64]:
-        return friction_array(
-            FrictionParameters(
-                inertia_kgm2=self.inertia_kgm2_,
-                viscous_cw_nms_per_rad=self.viscous_nms_per_rad_["cw"],
-                viscous_ccw_nms_per_rad=self.viscous_nms_per_rad_["ccw"],
-                coulomb_cw_nm=self.coulomb_nm_["cw"],
-                coulomb_ccw_nm=self.coulomb_nm_["ccw"],
-                stribeck_velocity_rad_s=ws,
-                static_friction_nm=ts,
-                stribeck_exponent=self.stribeck_exponent,
-            )
+    def _parameters(self, ts: float, ws: float) -> FrictionParameters:
+        """The model with the fitted ``J``, ``b``, ``Tc`` and these ``Ts``, ``ws``."""
+        return FrictionParameters(
+            inertia_kgm2=self.inertia_kgm2_,
+            viscous_cw_nms_per_rad=self.viscous_nms_per_rad_["cw"],
+            viscous_ccw_nms_per_rad=self.viscous_nms_per_rad_["ccw"],
+            coulomb_cw_nm=self.coulomb_nm_["cw"],
+            coulomb_ccw_nm=self.coulomb_nm_["ccw"],
+            stribeck_velocity_rad_s=ws,
+            static_friction_nm=ts,
+            stribeck_exponent=self.stribeck_exponent,
         )
+
+    def _law(self, ts: float, ws: float) -> NDArray[np.float64]:
+        return friction_array(self._parameters(ts, ws))
 
     def _fit_friction_map(self, runs: tuple[IdentRun, ...], fs: float) -> tuple[float, float]:
         """Starting ``Ts``, ``ws``: least squares on the friction map ``F = tau - J w'``."""
@@ -470,33 +476,27 @@ class FrictionIdentifier:
         return float(sol.x[0]), float(sol.x[1])
 
     # ---------------------------------------------------------------------- using the model
-    def _fitted(self) -> None:
-        if not hasattr(self, "stribeck_velocity_rad_s_"):
-            raise NotFittedError(f"{type(self).__name__} is not fitted yet; call fit() first")
-
-    def predict(
-        self, torque_nm: ArrayLike, fs: float, *, velocity0: float = 0.0
-    ) -> NDArray[np.float64]:
-        """Velocity (rad/s) of the identified shaft under a torque record, as an encoder would
-        report it (mean over each sample interval), starting at ``velocity0``."""
-        self._fitted()
+    def predict(self, torque_nm: ArrayLike, *, velocity0: float = 0.0) -> NDArray[np.float64]:
+        """Velocity (rad/s) of the identified shaft under a torque record sampled at ``fs_``,
+        as an encoder would report it (mean over each sample interval), from ``velocity0``."""
+        self._check_fitted()
         torque = np.ascontiguousarray(torque_nm, dtype=float)
         law = friction_array(self.to_parameters())
-        angle = _simulate_angle(torque, fs, law, self.inertia_kgm2_, velocity0, self.substeps)
-        return np.r_[velocity0, np.diff(angle) * fs]
+        angle = _simulate_angle(torque, self.fs_, law, self.inertia_kgm2_, velocity0, self.substeps)
+        return np.r_[velocity0, np.diff(angle) * self.fs_]
 
     def friction_torque(self, speed_rad_s: ArrayLike) -> NDArray[np.float64]:
         """The identified kinetic friction (N·m) at the given pinion speeds."""
-        self._fitted()
+        self._check_fitted()
         return friction_torque(speed_rad_s, self.to_parameters())
 
-    def score(self, torque_nm: ArrayLike, velocity_rad_s: ArrayLike, fs: float) -> float:
-        """VAF (%) of :meth:`predict` against a measured velocity."""
-        return float(vaf(velocity_rad_s, self.predict(torque_nm, fs)))
+    def score(self, torque_nm: ArrayLike, velocity_rad_s: ArrayLike) -> float:
+        """VAF (%) of :meth:`predict` against a measured velocity (both at ``fs_``)."""
+        return float(vaf(velocity_rad_s, self.predict(torque_nm)))
 
     def to_dict(self) -> dict[str, Any]:
         """The ``friction.json`` content (DESIGN.md section 6 keys plus the fit VAFs)."""
-        self._fitted()
+        self._check_fitted()
         return {
             "inertia_kgm2": self.inertia_kgm2_,
             "viscous_nms_per_rad": dict(self.viscous_nms_per_rad_),
@@ -511,17 +511,8 @@ class FrictionIdentifier:
 
     def to_parameters(self) -> FrictionParameters:
         """The identified model as parameters the controller and observer accept."""
-        self._fitted()
-        return FrictionParameters(
-            inertia_kgm2=self.inertia_kgm2_,
-            viscous_cw_nms_per_rad=self.viscous_nms_per_rad_["cw"],
-            viscous_ccw_nms_per_rad=self.viscous_nms_per_rad_["ccw"],
-            coulomb_cw_nm=self.coulomb_nm_["cw"],
-            coulomb_ccw_nm=self.coulomb_nm_["ccw"],
-            stribeck_velocity_rad_s=self.stribeck_velocity_rad_s_,
-            static_friction_nm=self.static_friction_nm_,
-            stribeck_exponent=self.stribeck_exponent,
-        )
+        self._check_fitted()
+        return self._parameters(self.static_friction_nm_, self.stribeck_velocity_rad_s_)
 
 
 def read_friction_json(path: str | Path, *, stribeck_exponent: float = 2.0) -> FrictionParameters:

@@ -24,12 +24,13 @@ above) and ``k`` recovered with the window's own ``t_c``.
 from __future__ import annotations
 
 from collections.abc import Sequence
-from typing import Literal, NamedTuple
+from typing import ClassVar, Literal, NamedTuple
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from anklelab.errors import NotFittedError, ParameterError
+from anklelab.errors import ParameterError
+from anklelab.ident._base import Estimator, one_of
 from anklelab.signals import vaf
 
 __all__ = ["ImpedanceFit", "ImpedanceModel", "StiffnessModel", "fit_impedance", "impedance_torque"]
@@ -213,15 +214,13 @@ def impedance_torque(
     return stiffness * theta + damping * kin[..., 1, :] + inertia * kin[..., 2, :]
 
 
-class ImpedanceModel:
+class ImpedanceModel(Estimator):
     """Estimator of ``T = I θ'' + b θ' + k θ`` (scikit-learn style).
 
     Parameters
     ----------
     stiffness_model : {"constant", "linear"}
         Constant stiffness, or ``k + k₁ (t - t_c)`` (see :func:`fit_impedance`).
-    fs : float, optional
-        Sample rate, Hz (needed by the linear stiffness model).
 
     Attributes
     ----------
@@ -231,6 +230,8 @@ class ImpedanceModel:
         ``k₁``, N·m/rad/s (0 for the constant model).
     vaf_ : ndarray
         In-sample VAF, %.
+    fs_ : float or None
+        Sample rate given to :meth:`fit`, Hz.
 
     Examples
     --------
@@ -243,11 +244,15 @@ class ImpedanceModel:
     (900.0, 100.0)
     """
 
-    def __init__(self, stiffness_model: StiffnessModel = "constant", fs: float | None = None):
-        self.stiffness_model = stiffness_model
-        self.fs = fs
+    _parameter_constraints: ClassVar = {"stiffness_model": [one_of("constant", "linear")]}
+    _fitted_attribute: ClassVar = "stiffness_"
 
-    def fit(self, kinematics: ArrayLike, torque: ArrayLike) -> ImpedanceModel:
+    def __init__(self, *, stiffness_model: StiffnessModel = "constant") -> None:
+        self.stiffness_model = stiffness_model
+
+    def fit(
+        self, kinematics: ArrayLike, torque: ArrayLike, *, fs: float | None = None
+    ) -> ImpedanceModel:
         """Fit over the whole record.
 
         Parameters
@@ -256,19 +261,22 @@ class ImpedanceModel:
             ``(θ, θ', θ'')`` in rad, rad/s, rad/s².
         torque : array_like, shape (..., n_times)
             Torque, N·m.
+        fs : float, optional
+            Sample rate, Hz (needed by the linear stiffness model).
         """
-        fit = fit_impedance(kinematics, torque, stiffness_model=self.stiffness_model, fs=self.fs)
+        self._validate_params()
+        fit = fit_impedance(kinematics, torque, stiffness_model=self.stiffness_model, fs=fs)
         self.stiffness_, self.damping_, self.inertia_, self.vaf_, self.stiffness_slope_ = fit
+        self.fs_ = fs
         return self
 
     def predict(self, kinematics: ArrayLike) -> NDArray[np.float64]:
         """Model torque, N·m, shape ``(..., n_times)``."""
-        if not hasattr(self, "stiffness_"):
-            raise NotFittedError(f"{type(self).__name__} is not fitted yet; call fit() first")
+        self._check_fitted()
         fit = ImpedanceFit(
             self.stiffness_, self.damping_, self.inertia_, self.vaf_, self.stiffness_slope_
         )
-        return impedance_torque(fit, kinematics, self.fs)
+        return impedance_torque(fit, kinematics, self.fs_)
 
     def score(self, kinematics: ArrayLike, torque: ArrayLike) -> float:
         """Mean VAF of :meth:`predict` against ``torque``, %."""

@@ -21,7 +21,7 @@ import json
 import math
 from collections.abc import Mapping, Sequence
 from pathlib import Path
-from typing import Any, Literal, get_args
+from typing import Any, ClassVar, Literal, get_args
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -31,8 +31,18 @@ from scipy.linalg import eigh, solve, solve_toeplitz
 from anklelab._atomic import write_text_atomic
 from anklelab._params import read_parameter_document
 from anklelab._version import __version__
-from anklelab.errors import NotFittedError, ParameterError
+from anklelab.errors import ParameterError
 from anklelab.forceplate import CHANNELS
+from anklelab.ident._base import (
+    Constraint,
+    Estimator,
+    distinct_subset,
+    interval,
+    none,
+    one_of,
+    sequence_of,
+    validate_parameter,
+)
 from anklelab.signals import derivative, lowpass, vaf
 
 __all__ = ["FILTERS_FORMAT", "INPUTS", "ImpulseResponse", "PlatformFilters"]
@@ -56,7 +66,11 @@ def _as_batch(x: ArrayLike, name: str) -> NDArray[np.float64]:
     return x
 
 
-class ImpulseResponse:
+_POSITIVE_INT = interval(1, integer=True)
+_METHOD = [one_of("pinv", "toeplitz")]
+
+
+class ImpulseResponse(Estimator):
     """Multi-input, multi-output causal FIR filters by the correlation method.
 
     Parameters
@@ -88,47 +102,46 @@ class ImpulseResponse:
     >>> rng = np.random.default_rng(0)
     >>> u = rng.normal(size=(2, 5000))
     >>> h = np.zeros((1, 2, 10)); h[0, 0, 2], h[0, 1, :3] = 1.0, [0.5, 0.25, 0.125]
-    >>> est = ImpulseResponse(10).fit(u, np.array([np.convolve(u[0], h[0, 0])[:5000]
+    >>> est = ImpulseResponse(n_lags=10).fit(u, np.array([np.convolve(u[0], h[0, 0])[:5000]
     ...                                            + np.convolve(u[1], h[0, 1])[:5000]]))
     >>> bool(np.allclose(est.irf_, h, atol=0.02))
     True
     >>> y = 2.0 * u[:1] + np.convolve(u[1], h[0, 1])[:5000]   # a static gain on input 0
-    >>> ImpulseResponse([1, 10]).fit(u, y).irf_[0, :, :4].round(2)
+    >>> ImpulseResponse(n_lags=[1, 10]).fit(u, y).irf_[0, :, :4].round(2)
     array([[2.  , 0.  , 0.  , 0.  ],
            [0.5 , 0.25, 0.12, 0.  ]])
     """
 
+    _parameter_constraints: ClassVar = {
+        "n_lags": [_POSITIVE_INT, sequence_of(_POSITIVE_INT)],
+        "method": _METHOD,
+        "order": [_POSITIVE_INT, none()],
+    }
+    _fitted_attribute: ClassVar = "irf_"
+
     def __init__(
         self,
-        n_lags: int | Sequence[int] = 100,
         *,
+        n_lags: int | Sequence[int] = 100,
         method: Method = "pinv",
         order: int | None = None,
-    ):
+    ) -> None:
         self.n_lags = n_lags
         self.method = method
         self.order = order
 
-    def _check_params(self, n_inputs: int) -> tuple[int, ...]:
+    def _lags(self, n_inputs: int) -> tuple[int, ...]:
         """Validate the parameters; return the filter length of each input."""
-        lags = np.asarray(self.n_lags)
-        if lags.ndim == 0:
-            lags = np.full(n_inputs, lags)
-        if (
-            lags.shape != (n_inputs,)
-            or lags.dtype.kind not in "iuf"
-            or np.any(lags != np.round(lags))
-            or np.any(lags < 1)
-        ):
+        self._validate_params()
+        if isinstance(self.n_lags, int | np.integer):
+            return (int(self.n_lags),) * n_inputs
+        validate_parameter("n_lags", self.n_lags, [sequence_of(_POSITIVE_INT, non_empty=True)])
+        if len(self.n_lags) != n_inputs:
             raise ParameterError(
                 f"n_lags: expected a positive integer or one per input ({n_inputs}), "
                 f"got {self.n_lags!r}"
             )
-        if self.method not in ("pinv", "toeplitz"):
-            raise ParameterError(f"method: expected 'pinv' or 'toeplitz', got {self.method!r}")
-        if self.order is not None and (int(self.order) != self.order or self.order < 1):
-            raise ParameterError(f"order: expected a positive integer or None, got {self.order!r}")
-        return tuple(int(n) for n in lags)
+        return tuple(int(n) for n in self.n_lags)
 
     def fit(self, u: ArrayLike, y: ArrayLike) -> ImpulseResponse:
         """Estimate the filters.
@@ -146,7 +159,7 @@ class ImpulseResponse:
             ``self``, fitted.
         """
         u, y = _as_batch(u, "u"), _as_batch(y, "y")
-        lags = self._check_params(u.shape[-2])
+        lags = self._lags(u.shape[-2])
         if u.shape[:-2] != y.shape[:-2] or u.shape[-1] != y.shape[-1]:
             raise ParameterError(
                 f"u, y: leading axes and n_times must match, got {u.shape} and {y.shape}"
@@ -188,18 +201,12 @@ class ImpulseResponse:
         -------
         ndarray, shape (..., n_outputs, n_times)
         """
-        return _filter(u, _irf(self))
+        self._check_fitted()
+        return _filter(u, self.irf_)
 
     def score(self, u: ArrayLike, y: ArrayLike) -> float:
         """Mean over records of the VAF pooled over output channels, %."""
         return float(np.mean(vaf(_as_batch(y, "y"), self.predict(u), pool=-2)))
-
-
-def _irf(estimator: ImpulseResponse | PlatformFilters) -> NDArray[np.float64]:
-    """The fitted filters, or :class:`NotFittedError` naming the estimator's class."""
-    if not hasattr(estimator, "irf_"):
-        raise NotFittedError(f"{type(estimator).__name__} is not fitted yet; call fit() first")
-    return estimator.irf_
 
 
 def _filter(u: ArrayLike, irf: NDArray[np.float64]) -> NDArray[np.float64]:
@@ -259,7 +266,7 @@ def _pinv_mdl(
     return vec[:, keep] @ (coord[keep] / lam[keep, None]), keep.size
 
 
-class PlatformFilters:
+class PlatformFilters(Estimator):
     """The unloaded platform's force transients on every force channel, from the motor angle.
 
     The motor angle is low-pass filtered (zero-phase Butterworth) and differentiated by a local
@@ -303,16 +310,33 @@ class PlatformFilters:
     ----------
     irf_ : ndarray, shape (n_channels, n_inputs, max(lags))
         Filter weights: N per (rad, rad/s or rad/s²) per sample, zero beyond a pathway's length.
+        With inputs low-passed at ``cutoff_hz``, neighbouring lags carry nearly the same input,
+        and the last lag of a pathway stands in for the response beyond the filter's length:
+        it jumps, and is not part of the decaying response (on the twin, zeroing it lowers the
+        held-out VAF from 99.8 to 98.0 %; 150 or 300 lags move the jump to their own last lag
+        and score 99.8 %).
     fs_ : float
         Sample rate the filters were fitted at, Hz.
     order_ : int
         Pseudo-inverse terms kept.
     """
 
+    _parameter_constraints: ClassVar = {
+        "inputs": [distinct_subset(INPUTS)],
+        "n_lags": [_POSITIVE_INT],
+        "angle_lags": [_POSITIVE_INT],
+        "method": _METHOD,
+        "cutoff_hz": [interval(0, closed="neither")],
+        "filter_order": [_POSITIVE_INT],
+        "derivative_window": [interval(3, integer=True)],
+        "channels": [sequence_of(Constraint("a name", lambda v: isinstance(v, str)))],
+    }
+    _fitted_attribute: ClassVar = "irf_"
+
     def __init__(
         self,
-        inputs: Sequence[Input] = ("angle", "acceleration"),
         *,
+        inputs: Sequence[Input] = ("angle", "acceleration"),
         n_lags: int = 100,
         angle_lags: int = 1,
         method: Method = "pinv",
@@ -330,25 +354,15 @@ class PlatformFilters:
         self.derivative_window = derivative_window
         self.channels = tuple(channels)
 
-    def _check_inputs(self) -> None:
-        unknown = [name for name in self.inputs if name not in INPUTS]
-        if not self.inputs or unknown or len(set(self.inputs)) != len(self.inputs):
-            raise ParameterError(
-                f"inputs: expected distinct names among {', '.join(INPUTS)}, got {self.inputs!r}"
-            )
-
     @property
     def lags(self) -> tuple[int, ...]:
         """Filter length of each input pathway, samples (``angle_lags`` or ``n_lags``)."""
-        for name in ("n_lags", "angle_lags"):
-            value = getattr(self, name)
-            if not isinstance(value, int | np.integer) or value < 1:
-                raise ParameterError(f"{name}: expected a positive integer, got {value!r}")
+        self._validate_params()
         return tuple(self.angle_lags if name == "angle" else self.n_lags for name in self.inputs)
 
     def input_signals(self, motor_angle: ArrayLike, fs: float) -> NDArray[np.float64]:
         """The filter inputs for a motor angle: shape ``(..., n_inputs, n_times)``."""
-        self._check_inputs()
+        self._validate_params()
         angle = lowpass(motor_angle, fs, self.cutoff_hz, order=self.filter_order)
         signals = {"angle": angle}
         for deriv, name in ((1, "velocity"), (2, "acceleration")):
@@ -374,7 +388,7 @@ class PlatformFilters:
             ``self``, fitted.
         """
         forces = self._check_forces(forces)
-        est = ImpulseResponse(self.lags, method=self.method)
+        est = ImpulseResponse(n_lags=self.lags, method=self.method)
         est.fit(self.input_signals(motor_angle, fs), self._filtered(forces, fs))
         self.irf_, self.order_, self.fs_ = est.irf_, est.order_, float(fs)
         return self
@@ -409,7 +423,8 @@ class PlatformFilters:
         -------
         ndarray, shape (..., n_channels or n_combinations, n_times)
         """
-        irf = _irf(self)
+        self._check_fitted()
+        irf = self.irf_
         if combine is not None:
             irf = np.einsum("mc,cil->mil", np.asarray(combine, dtype=float), irf)
         return _filter(self.input_signals(motor_angle, self.fs_), irf)
@@ -442,7 +457,7 @@ class PlatformFilters:
 
     def to_dict(self, **extra: Any) -> dict[str, Any]:
         """JSON-ready description of the fitted filters (``extra`` keys are added)."""
-        _irf(self)
+        self._check_fitted()
         return {
             "format": FILTERS_FORMAT,
             "anklelab_version": __version__,
@@ -474,7 +489,7 @@ class PlatformFilters:
         _check_scalars(data, origin)
         try:
             filters = cls(
-                data["inputs"],
+                inputs=data["inputs"],
                 n_lags=data["n_lags"],
                 # files written before per-pathway lengths used n_lags for the angle too
                 angle_lags=data.get("angle_lags", data["n_lags"]),
@@ -490,7 +505,7 @@ class PlatformFilters:
             raise ParameterError(f"{origin}: required key {exc.args[0]!r} is missing") from None
         except (TypeError, ValueError) as exc:
             raise ParameterError(f"{origin}: malformed value: {exc}") from None
-        filters._check_inputs()
+        filters._validate_params()
         expected = (len(filters.channels), len(filters.inputs), max(filters.lags))
         if irf.shape != expected or not np.all(np.isfinite(irf)):
             raise ParameterError(

@@ -4,8 +4,6 @@ Importing this package does not import matplotlib: each figure function imports 
 backend) when it draws.
 """
 
-from anklelab.report.comparisons import Comparison
-from anklelab.report.demo import write_demo_report
 from anklelab.report.figures_capstan import (
     chirp_tracking_figure,
     friction_figures,
@@ -13,12 +11,12 @@ from anklelab.report.figures_capstan import (
     render_figure,
     step_figure,
 )
+from anklelab.report.figures_impedance import impedance_figure
 from anklelab.report.figures_walking import (
     filters_figure,
     model_fit_figure,
     save_walking_figures,
     stance_figure,
-    stiffness_figure,
     walking_figures,
 )
 from anklelab.report.html import Figure, Section, Table, figure_png, render_html, write_report
@@ -28,7 +26,6 @@ from anklelab.report.sections import results_report
 __all__ = [
     "PAPER_000",
     "PAPER_001",
-    "Comparison",
     "Figure",
     "PaperValue",
     "Section",
@@ -37,6 +34,7 @@ __all__ = [
     "figure_png",
     "filters_figure",
     "friction_figures",
+    "impedance_figure",
     "model_fit_figure",
     "observer_figure",
     "render_figure",
@@ -45,8 +43,6 @@ __all__ = [
     "save_walking_figures",
     "stance_figure",
     "step_figure",
-    "stiffness_figure",
     "walking_figures",
-    "write_demo_report",
     "write_report",
 ]

@@ -11,9 +11,9 @@ from __future__ import annotations
 import json
 from collections.abc import Sequence
 from pathlib import Path
-from typing import Any
+from typing import Annotated, Any, Literal
 
-from pydantic import BaseModel, ConfigDict, ValidationError
+from pydantic import BaseModel, ConfigDict, Field, ValidationError
 
 from anklelab.errors import ResultsFormatError
 
@@ -30,6 +30,8 @@ class _Model(BaseModel):
 class _MeanSd(_Model):
     mean: float | None = None
     sd: float | None = None
+    ci95: Annotated[list[float | None], Field(min_length=2, max_length=2)] | None = None
+    poorly_determined: bool | None = None
 
 
 class _Filters(_Model):
@@ -41,7 +43,7 @@ class _Filters(_Model):
 
 class _TimingPoint(_Model):
     delay_ms: float
-    direction: str
+    direction: Literal["dorsi", "plantar"]
     n_perturbed: int | None = None
     n_unperturbed: int | None = None
     cop_m: float | None = None
@@ -50,6 +52,7 @@ class _TimingPoint(_Model):
     inertia_kgm2: _MeanSd | None = None
     vaf_percent: _MeanSd | None = None
     window_sensitivity: dict[str, dict[str, float | None]] = {}
+    warnings: list[str] = []
 
 
 class _Bench(_Model):
@@ -72,6 +75,10 @@ class _Walking(_Model):
     settings: dict[str, Any] = {}
     bench: list[_Bench] | None = None
     validation: list[_Validation] | None = None
+    warnings: list[str] = []
+    session: str | None = None
+    session_sha256: str | None = None
+    anklelab_version: str | None = None
 
 
 class _Directions(_Model):

@@ -1,5 +1,8 @@
 """Figures of the walking impedance analysis (paper 000, Figs. 5-8).
 
+The impedance summaries (against timing point and lever arm) come from
+:mod:`anklelab.report.figures_impedance`, drawn from what ``results.json`` holds.
+
 Each function returns a matplotlib :class:`~matplotlib.figure.Figure` built without pyplot (no
 global backend state; PNG rendering uses Agg), so importing this module does not import
 matplotlib. :func:`save_walking_figures` writes them all as PNG files, atomically.
@@ -13,6 +16,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from anklelab._atomic import write_bytes_atomic
+from anklelab.report.figures_impedance import impedance_figure
 from anklelab.report.html import figure_png
 
 if TYPE_CHECKING:
@@ -26,32 +30,50 @@ __all__ = [
     "model_fit_figure",
     "save_walking_figures",
     "stance_figure",
-    "stiffness_figure",
     "walking_figures",
 ]
 
 _UNITS = {"angle": "N/rad", "velocity": "N·s/rad", "acceleration": "N·s²/rad"}
 _COLORS = {"dorsi": "tab:blue", "plantar": "tab:orange"}
+_DIRECTION_WORDS = {"dorsi": "dorsiflexion", "plantar": "plantarflexion"}
+_TIMING_COLORS = ("tab:blue", "tab:green", "tab:orange", "tab:red", "tab:purple", "tab:brown")
+# the channels come in pairs that carry the same signal on a symmetric plate (fx12/fx34,
+# fz1/fz4, fz2/fz3): the first of a pair wide and pale, the second thin and dashed on top, so
+# a line never hides another
+_STYLES = ({"lw": 4.0, "alpha": 0.45, "ls": "-"}, {"lw": 1.3, "alpha": 1.0, "ls": "--"})
+_PAIRS = {"fx12": 0, "fx34": 1, "fy14": 0, "fy23": 1, "fz1": 0, "fz4": 1, "fz2": 0, "fz3": 1}
+_PAIR_COLORS = {"fx12": "tab:blue", "fx34": "tab:blue", "fy14": "tab:gray", "fy23": "tab:gray"}
+_PAIR_COLORS |= {"fz1": "tab:red", "fz4": "tab:red", "fz2": "tab:green", "fz3": "tab:green"}
 
 
-def _figure(rows: int, cols: int, width: float = 4.0, height: float = 2.6) -> tuple[Figure, Any]:
+def _figure(rows: int, cols: int, width: float, height: float, **kw: Any) -> tuple[Figure, Any]:
+    """A constrained-layout figure ``width`` × ``height`` inches overall (100 dpi in the report)."""
     from matplotlib.figure import Figure
 
-    fig = Figure(figsize=(width * cols, height * rows), layout="constrained")
-    return fig, fig.subplots(rows, cols, squeeze=False)
+    fig = Figure(figsize=(width, height), layout="constrained")
+    return fig, fig.subplots(rows, cols, squeeze=False, **kw)
+
+
+def _legend_below(fig: Figure, ax: Any, ncols: int) -> None:
+    """One legend for the figure, outside every panel (it never covers data)."""
+    handles, labels = ax.get_legend_handles_labels()
+    fig.legend(handles, labels, loc="outside lower center", ncols=ncols, frameon=False)
 
 
 def filters_figure(filters: PlatformFilters) -> Figure:
     """Platform filters per input pathway: horizontal channels left, vertical right.
 
     A pathway one lag long (the angle's, by default) is a static gain: one bar per channel.
+    A longer pathway is drawn against lag, its last lag as a separate marker: that weight stands
+    for the part of the response the filter's length cuts off (see the report guide), not for
+    the decaying response itself.
     """
-    fig, axes = _figure(len(filters.inputs), 2)
+    fig, axes = _figure(len(filters.inputs), 2, 11.0, 3.1 * len(filters.inputs))
     for row, (name, n_lags) in enumerate(zip(filters.inputs, filters.lags, strict=True)):
         for col, vertical in enumerate((False, True)):
             ax = axes[row, col]
             picked = [c for c, ch in enumerate(filters.channels) if ch.startswith("fz") == vertical]
-            ax.set_title(f"{name} → {'vertical' if vertical else 'horizontal'} channels")
+            ax.set_title(f"{name} → {'vertical' if vertical else 'horizontal'} force channels")
             ax.axhline(0.0, color="0.7", lw=0.5)
             if n_lags == 1:
                 labels = [filters.channels[c] for c in picked]
@@ -60,104 +82,128 @@ def filters_figure(filters: PlatformFilters) -> Figure:
                 continue
             lag_ms = np.arange(n_lags) / filters.fs_ * 1000.0
             for c in picked:
+                channel = filters.channels[c]
                 weights = filters.irf_[c, row, :n_lags] * filters.fs_
-                ax.plot(lag_ms, weights, label=filters.channels[c], lw=1)
+                style = _STYLES[_PAIRS.get(channel, 0)]
+                color = _PAIR_COLORS.get(channel)
+                (line,) = ax.plot(lag_ms[:-1], weights[:-1], label=channel, color=color, **style)
+                ax.plot(lag_ms[-1], weights[-1], "o", mfc="none", color=line.get_color(), ms=6)
+            ax.plot([], [], "o", mfc="none", color="0.3", label="last lag: the cut-off tail")
             ax.set_xlabel("lag (ms)")
             ax.set_ylabel(f"impulse response ({_UNITS[name]}/s)")
-            ax.legend(fontsize="small", ncols=2)
+            ax.legend(
+                fontsize="small",
+                ncols=3,
+                loc="upper center",
+                bbox_to_anchor=(0.5, -0.22),
+                frameon=False,
+            )
     return fig
 
 
-def _band(ax: Any, t: Any, data: Any, color: str, label: str) -> None:
-    mean, sd = data.mean(axis=0), data.std(axis=0)
-    ax.plot(t, mean, color=color, lw=1.5, label=label)
-    ax.fill_between(t, mean - sd, mean + sd, color=color, alpha=0.25, lw=0)
+def _band(
+    ax: Any, t: Any, data: Any, color: str, label: str, scale: float = 1.0, zorder: float = 2
+) -> None:
+    mean, sd = scale * data.mean(axis=0), scale * data.std(axis=0)
+    ax.plot(t, mean, color=color, lw=1.3, label=label, zorder=zorder)
+    ax.fill_between(t, mean - sd, mean + sd, color=color, alpha=0.2, lw=0)
 
 
 def stance_figure(results: WalkingResults) -> Figure:
-    """Ankle angle and torque after heel contact, perturbed vs unperturbed (paper 000, Fig. 5)."""
-    points = results.timing_points
-    fig, axes = _figure(max(1, len(points)), 2, width=4.5)
+    """Ankle angle (deg) and torque after heel contact, perturbed vs unperturbed (paper 000,
+    Fig. 5): one row per direction, every timing point in its own colour over the unperturbed
+    mean ± sd, the dotted lines at the mean detected onsets."""
+    directions = [d for d in _COLORS if any(tp.direction == d for tp in results.timing_points)]
+    fig, axes = _figure(
+        max(1, len(directions)), 2, 11.0, 0.6 + 2.7 * max(1, len(directions)), sharex=True
+    )
     stance = results.stance
     t_ms = stance.times * 1000.0
     none = stance["none"]
-    for row, tp in enumerate(points):
-        group = stance[tp.key]
-        for col, (channel, unit) in enumerate((("angle", "rad"), ("torque", "N·m"))):
+    delays = sorted({tp.delay_ms for tp in results.timing_points})
+    colors = dict(zip(delays, _TIMING_COLORS * (1 + len(delays) // 6), strict=False))
+    channels = (
+        ("angle", "ankle angle (deg)", np.degrees(1.0)),
+        ("torque", "ankle torque (N·m)", 1.0),
+    )
+    for row, direction in enumerate(directions):
+        for col, (channel, label, scale) in enumerate(channels):
             ax = axes[row, col]
-            _band(ax, t_ms, none.get_data(channel), "black", f"unperturbed (n={len(none)})")
+            # the unperturbed mean is drawn on top: before its onset a perturbed curve should
+            # run under it, and where one departs from it, both stay visible
             _band(
                 ax,
                 t_ms,
-                group.get_data(channel),
-                _COLORS[tp.direction],
-                f"{tp.key} (n={len(group)})",
+                none.get_data(channel),
+                "black",
+                f"unperturbed (n={len(none)})",
+                scale,
+                zorder=5,
             )
-            ax.axvline(np.mean(tp.onset_ms), color="0.4", ls=":", lw=1)
+            for tp in (tp for tp in results.timing_points if tp.direction == direction):
+                group = stance[tp.key]
+                color = colors[tp.delay_ms]
+                _band(
+                    ax,
+                    t_ms,
+                    group.get_data(channel),
+                    color,
+                    f"perturbed at {tp.delay_ms:g} ms",
+                    scale,
+                )
+                ax.axvline(np.mean(tp.onset_ms), color=color, ls=":", lw=1)
+            ax.set_title(f"{_DIRECTION_WORDS[direction]}: {label.split(' (')[0]}")
+            ax.set_ylabel(label)
             ax.set_xlabel("time after heel contact (ms)")
-            ax.set_ylabel(f"ankle {channel} ({unit})")
-            ax.legend(fontsize="small")
+            ax.label_outer(remove_inner_ticks=False)
+    if directions:
+        _legend_below(fig, axes[0, 0], ncols=len(delays) + 1)
     return fig
 
 
 def model_fit_figure(results: WalkingResults) -> Figure:
-    """Perturbation torque measured vs the 2nd-order model per condition (paper 000, Fig. 7b)."""
+    """Perturbation torque measured vs the 2nd-order model per condition (paper 000, Fig. 7b):
+    one row per direction, one column per timing point."""
     points = results.timing_points
-    cols = min(4, max(1, len(points)))
-    rows = -(-max(1, len(points)) // cols)
-    fig, axes = _figure(rows, cols, width=3.6)
-    for ax, tp in zip(axes.flat, points, strict=False):
+    directions = [d for d in _COLORS if any(tp.direction == d for tp in points)]
+    delays = sorted({tp.delay_ms for tp in points})
+    fig, axes = _figure(
+        max(1, len(directions)),
+        max(1, len(delays)),
+        11.0,
+        0.7 + 2.5 * max(1, len(directions)),
+        sharex=True,
+        sharey="row",
+    )
+    for ax in axes.flat:
+        ax.set_visible(False)
+    for tp in points:
+        ax = axes[directions.index(tp.direction), delays.index(tp.delay_ms)]
+        ax.set_visible(True)
         t_ms = tp.time_s * 1000.0
-        _band(ax, t_ms, tp.torque, _COLORS[tp.direction], "measured")
-        ax.plot(t_ms, tp.model_torque.mean(axis=0), "k--", lw=1.2, label="model")
+        _band(ax, t_ms, tp.torque, _COLORS[tp.direction], "measured (mean ± sd)")
+        ax.plot(t_ms, tp.model_torque.mean(axis=0), "k--", lw=1.2, label="model I θ'' + b θ' + k θ")
         ax.set_title(
-            f"{tp.key}: k={tp.stiffness.mean:.0f} N·m/rad, VAF {tp.vaf.mean:.1f} %",
+            f"{_DIRECTION_WORDS[tp.direction]}, {tp.delay_ms:g} ms\n"
+            f"k = {tp.stiffness.mean:.0f} N·m/rad, VAF {tp.vaf.mean:.1f} %",
             fontsize="medium",
         )
         ax.set_xlabel("time after onset (ms)")
         ax.set_ylabel("torque (N·m)")
-        ax.legend(fontsize="small")
-    for ax in list(axes.flat)[len(points) :]:
-        ax.set_visible(False)
-    return fig
-
-
-def stiffness_figure(results: WalkingResults) -> Figure:
-    """Walking stiffness (95 % intervals) against lever arm with the bench line (paper 000,
-    Fig. 8)."""
-    fig, axes = _figure(1, 1, width=5.5, height=4.0)
-    ax = axes[0, 0]
-    if results.bench:
-        d = np.array([row.distance_m for row in results.bench]) * 100.0
-        k = np.array([row.stiffness_nm_per_rad for row in results.bench])
-        ax.plot(d, k, "ks-", label="bench (testing machine)")
-    for direction, color in _COLORS.items():
-        points = [tp for tp in results.timing_points if tp.direction == direction]
-        if points:
-            k = np.array([tp.stiffness.mean for tp in points])
-            interval = np.array([tp.stiffness.ci95 for tp in points]).T
-            ax.errorbar(
-                [tp.cop_m * 100.0 for tp in points],
-                k,
-                yerr=np.abs(interval - k),
-                fmt="o",
-                color=color,
-                capsize=3,
-                label=f"walking, {direction}",
-            )
-    ax.set_xlabel("lever arm / actuator distance (cm)")
-    ax.set_ylabel("stiffness (N·m/rad)")
-    ax.legend()
+        ax.label_outer()
+    if points:
+        _legend_below(fig, next(ax for ax in axes.flat if ax.get_visible()), ncols=2)
     return fig
 
 
 def walking_figures(results: WalkingResults) -> dict[str, Figure]:
     """Every walking figure, by file stem."""
     return {
+        "impedance_summary": impedance_figure(results),
         "filters": filters_figure(results.filters),
         "stance_profiles": stance_figure(results),
         "model_fit": model_fit_figure(results),
-        "stiffness_vs_lever_arm": stiffness_figure(results),
+        "impedance_vs_lever_arm": impedance_figure(results, x="lever_arm"),
     }
 
 

@@ -50,30 +50,53 @@ class Figure:
 
 @dataclass(frozen=True)
 class Table:
-    """A table of already-formatted cells (numbers are formatted with ``{:.4g}``)."""
+    """A table of already-formatted cells (numbers are formatted with ``{:.4g}``).
+
+    Cells are right-aligned (numbers), the first column and the ``text_columns`` (indices of
+    columns holding sentences) left-aligned.
+    """
 
     title: str
     columns: Sequence[str]
     rows: Sequence[Sequence[Any]]
+    text_columns: Sequence[int] = ()
 
 
 @dataclass(frozen=True)
 class Section:
-    """One titled part of the report."""
+    """One titled part of the report.
+
+    Attributes
+    ----------
+    title, text : str
+        Heading and paragraphs (separated by blank lines).
+    tables, figures : sequence
+        Shown in this order after the text (figures first with ``figures_first``).
+    notes : sequence of str
+        Points a reader must see before the numbers (warnings), shown as a list after the text.
+    details : sequence of Table
+        Reference tables folded away under their titles (an HTML ``<details>``: no script).
+    figures_first : bool
+        Figures before tables (a summary whose figure is the point).
+    """
 
     title: str
     text: str = ""
     tables: Sequence[Table] = field(default_factory=tuple)
     figures: Sequence[Figure] = field(default_factory=tuple)
+    notes: Sequence[str] = field(default_factory=tuple)
+    details: Sequence[Table] = field(default_factory=tuple)
+    figures_first: bool = False
 
 
-def figure_png(fig: Any, *, dpi: int = 110) -> bytes:
-    """Render a matplotlib figure to PNG bytes and close it."""
-    import matplotlib.pyplot as plt
+def figure_png(fig: Any, *, dpi: int = 100) -> bytes:
+    """Render a matplotlib figure to PNG bytes.
 
+    The figure lays itself out (``layout="constrained"``): it is saved at its own size, so a
+    figure 11 inches wide fills the report's 1100-pixel column at 100 dpi without rescaling.
+    """
     buffer = io.BytesIO()
-    fig.savefig(buffer, format="png", dpi=dpi, bbox_inches="tight")
-    plt.close(fig)
+    fig.savefig(buffer, format="png", dpi=dpi)
     return buffer.getvalue()
 
 
@@ -83,14 +106,40 @@ def _cell(value: Any) -> str:
     return html.escape(str(value))
 
 
-def _table(table: Table) -> str:
+def _table(table: Table, *, heading: bool = True) -> str:
     head = "".join(f"<th>{html.escape(c)}</th>" for c in table.columns)
     body = "".join(
-        "<tr>" + "".join(f"<td>{_cell(v)}</td>" for v in row) + "</tr>" for row in table.rows
+        "<tr>"
+        + "".join(
+            f'<td class="text">{_cell(v)}</td>'
+            if k in table.text_columns
+            else f"<td>{_cell(v)}</td>"
+            for k, v in enumerate(row)
+        )
+        + "</tr>"
+        for row in table.rows
     )
+    title = f"<h3>{html.escape(table.title)}</h3>" if heading else ""
+    return f"{title}<table><thead><tr>{head}</tr></thead><tbody>{body}</tbody></table>"
+
+
+def _details(table: Table) -> str:
     return (
-        f"<h3>{html.escape(table.title)}</h3>"
-        f"<table><thead><tr>{head}</tr></thead><tbody>{body}</tbody></table>"
+        f"<details><summary>{html.escape(table.title)}</summary>"
+        f"{_table(table, heading=False)}</details>"
+    )
+
+
+def _section(s: Section) -> str:
+    tables = "".join(_table(t) for t in s.tables)
+    figures = "".join(_figure(f) for f in s.figures)
+    notes = "".join(f"<li>{html.escape(n)}</li>" for n in s.notes)
+    return (
+        f"<section><h2>{html.escape(s.title)}</h2>{_paragraphs(s.text)}"
+        + (f'<ul class="notes">{notes}</ul>' if notes else "")
+        + (figures + tables if s.figures_first else tables + figures)
+        + "".join(_details(t) for t in s.details)
+        + "</section>"
     )
 
 
@@ -108,12 +157,16 @@ def _paragraphs(text: str) -> str:
 
 
 _STYLE = """
-body{font-family:system-ui,sans-serif;max-width:1100px;margin:2em auto;padding:0 1em;color:#222}
-h1{border-bottom:2px solid #444}h2{margin-top:2em;border-bottom:1px solid #bbb}
-table{border-collapse:collapse;margin:0.5em 0 1.5em}td,th{border:1px solid #ccc;padding:3px 8px}
-th{background:#f0f0f0}td{text-align:right}td:first-child{text-align:left}
-figure{display:inline-block;margin:0.5em;vertical-align:top}img{max-width:100%;height:auto}
-figcaption{font-size:0.9em;color:#555}.meta{font-size:0.85em;color:#555}
+body{font-family:system-ui,sans-serif;max-width:1100px;margin:1.5em auto;padding:0 1em;color:#222}
+h1{border-bottom:2px solid #444;margin-bottom:0.4em}
+h2{margin-top:1.6em;border-bottom:1px solid #bbb}
+table{border-collapse:collapse;margin:0.5em 0 1.2em}td,th{border:1px solid #ccc;padding:2px 8px}
+th{background:#f0f0f0}td{text-align:right}td:first-child,td.text{text-align:left}
+figure{display:inline-block;margin:0.5em 0;vertical-align:top;max-width:100%}
+img{max-width:100%;height:auto}figcaption{font-size:0.9em;color:#555;max-width:1100px}
+.meta table{font-size:0.8em;color:#444;margin:0}.meta td{text-align:left;overflow-wrap:anywhere}
+details{margin:0.3em 0 1em}summary{cursor:pointer;color:#333}
+ul.notes{background:#fff6e0;border-left:4px solid #e0a000;padding:0.4em 1em 0.4em 2em}
 """
 
 
@@ -127,28 +180,21 @@ def render_html(title: str, sections: Iterable[Section], metadata: Mapping[str, 
     sections : iterable of Section
         Report body, in order.
     metadata : mapping
-        Shown at the top (anklelab version, inputs and their hashes, settings).
+        Shown under the title as a two-column table (what was analysed, when, by which
+        anklelab version).
 
     Examples
     --------
     >>> page = render_html("R", [Section("S", "hello", [Table("T", ["a"], [[1.5]])])], {"v": 1})
-    >>> "<td>1.5</td>" in page and "<h2>S</h2>" in page
+    >>> "<td>1.5</td>" in page and "<h2>S</h2>" in page and "<th>v</th>" in page
     True
     """
-    meta = "".join(
-        f"<li><b>{html.escape(str(k))}</b>: {html.escape(str(v))}</li>" for k, v in metadata.items()
-    )
-    body = "".join(
-        f"<section><h2>{html.escape(s.title)}</h2>{_paragraphs(s.text)}"
-        + "".join(_table(t) for t in s.tables)
-        + "".join(_figure(f) for f in s.figures)
-        + "</section>"
-        for s in sections
-    )
+    meta = _table(Table("", list(map(str, metadata)), [list(metadata.values())]), heading=False)
+    body = "".join(_section(s) for s in sections)
     return (
         f'<!DOCTYPE html><html lang="en"><head><meta charset="utf-8">'
         f"<title>{html.escape(title)}</title><style>{_STYLE}</style></head>"
-        f'<body><h1>{html.escape(title)}</h1><ul class="meta">{meta}</ul>{body}</body></html>'
+        f'<body><h1>{html.escape(title)}</h1><div class="meta">{meta}</div>{body}</body></html>'
     )
 
 

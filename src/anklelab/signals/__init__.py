@@ -1,10 +1,10 @@
 """Signal processing: zero-phase filters, derivatives, event detection, trials (epochs), VAF."""
 
+from anklelab.metrics import vaf
 from anklelab.signals.derivatives import derivative, kinematics
 from anklelab.signals.epochs import Trials, bootstrap_weights, epoch, stack_recordings
 from anklelab.signals.events import NOT_FOUND, Onsets, heel_contact, perturbation_onset
 from anklelab.signals.filters import lowpass, lowpass_min_samples
-from anklelab.signals.metrics import vaf
 
 __all__ = [
     "NOT_FOUND",

@@ -56,7 +56,7 @@ def fit_platform_filters(
         )
     fs = session.info.sample_rate_hz
     filters = PlatformFilters(
-        settings.filter_inputs,
+        inputs=settings.filter_inputs,
         n_lags=settings.n_lags,
         angle_lags=settings.angle_lags,
         method=settings.filter_method,

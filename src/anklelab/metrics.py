@@ -1,4 +1,8 @@
-"""Goodness of fit: variance accounted for (VAF)."""
+"""Goodness of fit: variance accounted for (VAF).
+
+On the ground floor (it imports nothing of anklelab), so that every layer, the twins' experiments
+included, scores fits with the same function; :mod:`anklelab.signals` re-exports it.
+"""
 
 from __future__ import annotations
 

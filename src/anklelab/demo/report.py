@@ -2,28 +2,29 @@
 
 The figures are written beside the data they show (``OUT/perturberator``, ``OUT/capstan``) by the
 walking and capstan figure functions, then embedded in the report with the comparison tables of
-:mod:`anklelab.report.comparisons`.
+:mod:`anklelab.demo.comparisons`.
 """
 
 from __future__ import annotations
 
-import json
 import re
 from collections.abc import Sequence
+from datetime import UTC, datetime
 from pathlib import Path
 
-from anklelab._atomic import write_text_atomic
+from anklelab._atomic import write_json_atomic
 from anklelab._version import __version__
-from anklelab.pipelines.demo import COMPENSATIONS, CapstanDemo, DemoSettings, PerturberatorDemo
-from anklelab.report.comparisons import (
+from anklelab.demo.comparisons import (
     COLUMNS,
     Comparison,
     capstan_comparison,
     grouped,
     perturberator_comparison,
 )
+from anklelab.demo.run import COMPENSATIONS, CapstanDemo, DemoSettings, PerturberatorDemo
 from anklelab.report.html import Figure, Section, Table, write_report
-from anklelab.report.sections import friction_section, walking_section
+from anklelab.report.sections import friction_section, walking_sections
+from anklelab.report.summary import settings_table
 
 __all__ = ["capstan_figures", "perturberator_figures", "write_demo_report"]
 
@@ -107,6 +108,7 @@ def _tables(rows: Sequence[Comparison]) -> list[Table]:
             group,
             [*COLUMNS, "paper source"],
             [[*row.cells(), row.paper.source if row.paper else ""] for row in members],
+            text_columns=(len(COLUMNS) - 1, len(COLUMNS)),
         )
         for group, members in grouped(rows).items()
     ]
@@ -151,7 +153,7 @@ def write_demo_report(
         },
         **{paper: [row.to_dict() for row in rows] for paper, rows in comparisons.items()},
     }
-    summary_path = write_text_atomic(out / "summary.json", json.dumps(summary, indent=2) + "\n")
+    summary_path = write_json_atomic(out / "summary.json", summary)
     bode = perturberator_figures(perturberator)
     control = capstan_figures(capstan)
     friction_dir = capstan.directory / "friction"
@@ -161,11 +163,13 @@ def write_demo_report(
             "The twin simulated paper 000's session (calibration, perturbed walking, testing "
             "machine); anklelab analysed it as it would a lab's. 'twin truth' is what a perfect "
             "estimator returns (the session's truth group); the servo loop and filter VAF have "
-            "no closed-form truth.",
+            "no closed-form truth. 'against the paper' says why a value departs from the "
+            "paper's, or marks a miss.",
             _tables(comparisons["paper_000"]),
             bode,
+            details=[settings_table(settings.model_dump(), "Demo settings")],
         ),
-        walking_section(
+        *walking_sections(
             perturberator.document,
             perturberator.directory,
             title="Walking impedance (perturberator/results.json)",
@@ -187,9 +191,12 @@ def write_demo_report(
         ),
     ]
     metadata = {
-        "anklelab version": __version__,
+        "run": "quick (small trial counts)"
+        if settings == DemoSettings.quick(settings.seed)
+        else "full",
         "seed": settings.seed,
-        "settings": ", ".join(f"{k}={v}" for k, v in settings.model_dump().items()),
+        "written": datetime.now(tz=UTC).strftime("%Y-%m-%d %H:%M UTC"),
+        "anklelab version": __version__,
     }
     report = write_report(
         out / "report.html",

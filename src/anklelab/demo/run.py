@@ -25,7 +25,6 @@ Every figure compared later comes from these runs; the twins' ground truth is ke
 
 from __future__ import annotations
 
-import json
 import math
 from collections.abc import Callable
 from dataclasses import asdict, dataclass
@@ -35,7 +34,7 @@ from typing import Any, Literal
 import numpy as np
 from pydantic import Field
 
-from anklelab._atomic import write_text_atomic
+from anklelab._atomic import write_json_atomic
 from anklelab._params import Parameters
 from anklelab.data import save_session, session_hash
 from anklelab.data.session import Session
@@ -132,10 +131,6 @@ def _no_task(description: str) -> Callable[[int, int], None]:
     return lambda done, total: None
 
 
-def _write_json(path: Path, document: Any) -> Path:
-    return write_text_atomic(path, json.dumps(document, indent=2) + "\n")
-
-
 # ------------------------------------------------------------------------------- paper 000
 
 
@@ -181,7 +176,7 @@ def run_perturberator(
     save_session(session, path, progress=task("Perturberator: writing session.h5"))
     measured = task("Perturberator: measuring the servo loop (PRBS)")
     bode = measure_servo_bode()
-    _write_json(directory / "servo_bode.json", bode.summary())
+    write_json_atomic(directory / "servo_bode.json", bode.summary())
     measured(1, 1)
     step = task("Perturberator: analysing walking")
     names = list(STEPS)
@@ -192,7 +187,7 @@ def run_perturberator(
     )
     step(len(names), len(names))
     document = results.to_dict(session=path.name, session_sha256=session_hash(path))
-    _write_json(directory / "results.json", document)
+    write_json_atomic(directory / "results.json", document)
     return PerturberatorDemo(directory, session, bode, results, document)
 
 
@@ -308,7 +303,7 @@ def run_capstan(out: str | Path, settings: DemoSettings, *, task: Task = _no_tas
     bar = task("capstan: identifying friction and inertia")
     friction = FrictionIdentifier(stribeck_exponent=params.friction.stribeck_exponent).fit(ident)
     (directory / "friction").mkdir(exist_ok=True)
-    _write_json(directory / "friction" / "friction.json", friction.to_dict())
+    write_json_atomic(directory / "friction" / "friction.json", friction.to_dict())
     bar(1, 1)
 
     model = friction.to_parameters()
@@ -342,5 +337,5 @@ def run_capstan(out: str | Path, settings: DemoSettings, *, task: Task = _no_tas
         )
         bar(k + 1, len(OBSERVER_TASKS))
     demo = CapstanDemo(directory, ident, friction, steps, chirps, observers)
-    _write_json(directory / "control.json", demo.control_document())
+    write_json_atomic(directory / "control.json", demo.control_document())
     return demo
