@@ -82,6 +82,7 @@ def perturberator(
     The session carries a truth group (parameters, reference stiffness per timing point and
     direction, true heel contacts and onsets, time courses) for validating analyses.
     """
+    from anklelab.commands._kernels import prepare_kernel
     from anklelab.commands._progress import recording_progress
     from anklelab.data import save_session
     from anklelab.errors import ParameterError
@@ -94,6 +95,7 @@ def perturberator(
         raise ParameterError(f"--foot: expected 'prosthetic' or 'human', got {foot!r}")
     parameters = load_platform("perturberator", params)
     with recording_progress() as task:
+        prepare_kernel(parameters, task)
         session = simulate_perturberator(
             parameters,
             seed=seed,
