@@ -30,6 +30,7 @@ RANK = {
     "signals": 5,
     "ident": 6,
     "pipelines": 7,
+    "studies": 7.5,  # many sessions through the twin and the pipelines, on Dask; above report
     "report": 8,
     "commands": 9,
     "cli": 10,

@@ -9,14 +9,17 @@ import typer
 from anklelab import __version__
 from anklelab.commands import (
     analyze,
+    batch,
     capstan,
     demo,
+    design,
     identify,
     importer,
     platform,
     report,
     session,
     simulate,
+    study,
 )
 from anklelab.errors import AnklelabError
 
@@ -35,6 +38,9 @@ app.add_typer(simulate.app, name="simulate")
 app.add_typer(capstan.app, name="capstan")
 app.command("demo")(demo.demo)
 app.command("report")(report.report)
+app.command("study")(study.study)
+app.command("design")(design.design)
+app.command("batch")(batch.batch)
 
 
 def _version(value: bool) -> None:

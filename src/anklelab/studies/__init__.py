@@ -10,6 +10,8 @@ Nothing here imports the twin until a cell runs, so analysing recorded data neve
 simulator or numba.
 """
 
+from anklelab.studies.batch import BatchRun, run_batch
+from anklelab.studies.design import Design, design_trials
 from anklelab.studies.execute import LOCAL_CLUSTER, ResultStore, Task, attempt, run_tasks
 from anklelab.studies.rows import QUANTITIES, interval, timing_point_rows
 from anklelab.studies.spec import Cell, Study, TwinSettings, load_study, study_from_mapping

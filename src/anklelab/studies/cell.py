@@ -55,9 +55,10 @@ def simulate_cell(cell: Cell, *, threads: int | None = 1) -> Session:
         warnings.simplefilter("ignore", AnklelabWarning)
         if twin.randomised == "none":
             params = base.replace(_noise(base, twin.noise_scale) | cell.params)
+            per_point = twin.trials_per_point or params.walking.trials_per_point
             return simulate_perturberator(
-                params, seed=cell.seed, foot=twin.foot, trials_per_point=twin.trials_per_point,
-                n_unperturbed=twin.n_unperturbed, **options,
+                params, seed=cell.seed, foot=twin.foot, trials_per_point=per_point,
+                n_unperturbed=_unperturbed(twin, per_point), **options,
             )  # fmt: skip
         # the randomised twin's own sequence (simulate_randomised), with the cell's overrides
         rng = np.random.default_rng(cell.seed)
@@ -68,7 +69,7 @@ def simulate_cell(cell: Cell, *, threads: int | None = 1) -> Session:
             trials_per_point=twin.trials_per_point,
             params=base,
         )
-        unperturbed = draw.n_unperturbed if twin.n_unperturbed is None else twin.n_unperturbed
+        unperturbed = _unperturbed(twin, draw.trials_per_point) or draw.n_unperturbed
         session = simulate_perturberator(
             draw.params.replace(cell.params), seed=rng, foot=draw.foot,
             trials_per_point=draw.trials_per_point, n_unperturbed=unperturbed, **options,
@@ -110,6 +111,13 @@ def run_cell(cell: Cell, *, threads: int | None = 1) -> dict[str, Any]:
         "simulate_s": simulated - start,
         "analyze_s": time.perf_counter() - simulated,
     }
+
+
+def _unperturbed(twin: TwinSettings, per_point: int) -> int | None:
+    """Unperturbed trials the settings ask for (None: the default)."""
+    if twin.unperturbed_per_point is not None:
+        return max(1, round(twin.unperturbed_per_point * per_point))
+    return twin.n_unperturbed
 
 
 def _noise(base: Any, scale: float) -> dict[str, float]:

@@ -72,6 +72,10 @@ class TwinSettings(Parameters):
         What walks on the plate (ignored when ``randomised`` draws the foot).
     trials_per_point, n_unperturbed, n_calibration
         Protocol size; unset means the parameter set's (or, randomised, the draw's).
+    unperturbed_per_point
+        Instead of ``n_unperturbed``: that many unperturbed trials per perturbed trial of one
+        timing point (paper 000: 400 for 100, so 4), so that the protocol scales as a whole when
+        ``trials_per_point`` varies.
     noise_scale
         Factor on every noise source: force-plate noise and drift, goniometer precision,
         load-cell noise.
@@ -87,6 +91,7 @@ class TwinSettings(Parameters):
     foot: Literal["prosthetic", "human"] = "prosthetic"
     trials_per_point: int | None = Field(None, ge=1)
     n_unperturbed: int | None = Field(None, ge=1)
+    unperturbed_per_point: float | None = Field(None, gt=0)
     n_calibration: int | None = Field(None, ge=1)
     noise_scale: float = Field(1.0, ge=0)
     randomised: Literal["none", "prosthetic", "human", "random"] = "none"

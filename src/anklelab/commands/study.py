@@ -1,0 +1,118 @@
+"""``anklelab study``: a grid or random sample of simulated sessions, analysed, on Dask."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import TYPE_CHECKING, Annotated
+
+import typer
+
+if TYPE_CHECKING:
+    import pandas as pd
+
+__all__ = ["ForceOption", "RetriesOption", "SchedulerOption", "WorkersOption", "study"]
+
+SchedulerOption = Annotated[
+    str | None,
+    typer.Option(
+        "--scheduler",
+        metavar="ADDRESS",
+        help="Where to run: 'local-cluster' (a Dask LocalCluster over TCP on this machine) or "
+        "the address of a running Dask scheduler (tcp://HOST:8786). Default: Dask's local "
+        "scheduler over this machine's CPUs.",
+    ),
+]
+WorkersOption = Annotated[
+    int | None,
+    typer.Option(help="Worker processes on this machine (default: one per CPU).", min=1),
+]
+RetriesOption = Annotated[
+    int, typer.Option(help="Extra tries of a task that fails, before it is reported.", min=0)
+]
+ForceOption = Annotated[
+    bool,
+    typer.Option(
+        "--force", help="Write into a directory holding other files or another run (restart)."
+    ),
+]
+FiguresOption = Annotated[bool, typer.Option("--figures/--no-figures", help="Write PNG figures.")]
+
+
+def study(
+    study_file: Annotated[
+        Path, typer.Argument(metavar="STUDY", help="Study file (TOML): see the studies guide.")
+    ],
+    out: Annotated[Path, typer.Option("--out", "-o", help="Output directory.")],
+    scheduler: SchedulerOption = None,
+    workers: WorkersOption = None,
+    retries: RetriesOption = 1,
+    force: ForceOption = False,
+    figures: FiguresOption = True,
+) -> None:
+    """Simulate and analyse every cell of a study (twin settings x analysis settings x seeds).
+
+    Writes OUT/results.parquet and .csv (one row per session, timing point and quantity: truth,
+    estimate, interval, error, coverage), OUT/summary.parquet and .csv (bias, sd, RMSE,
+    coverage per cell), OUT/cells.csv (status, error and times per session) and
+    OUT/figures/. Run again with the same OUT to resume a study that was stopped.
+    """
+    from anklelab.commands._kernels import prepare_kernel
+    from anklelab.commands._progress import recording_progress
+    from anklelab.platforms import load_platform
+    from anklelab.studies import load_study, run_study
+    from anklelab.studies.study import file_sha256
+
+    spec = load_study(study_file)
+    with recording_progress() as task:
+        if scheduler is None:  # local workers share this machine's kernel cache
+            prepare_kernel(load_platform("perturberator"), task)
+        run = run_study(
+            spec, out, study_sha256=file_sha256(study_file), scheduler=scheduler,
+            workers=workers, retries=retries, force=force, figures=figures,
+            progress=task(f"{spec.name}: sessions"),
+        )  # fmt: skip
+    _print_summary(run.summary, spec.varied, run.results)
+    typer.echo(
+        f"{len(run.cells)} sessions ({run.resumed} already done, {run.ran} run); results in {out}"
+    )
+    _report_failures(run.failed)
+
+
+def _print_summary(summary: pd.DataFrame, varied: list[str], results: pd.DataFrame) -> None:
+    from rich import box
+    from rich.console import Console
+    from rich.table import Table
+
+    rows = summary[summary["quantity"] == "stiffness_nm_per_rad"]
+    if rows.empty:
+        return
+    kinds = "/".join(sorted(set(rows["interval_kind"])))
+    table = Table(
+        box=box.SIMPLE_HEAD,
+        title="stiffness error over seeds, % of truth",
+        caption=f"interval: {kinds}; coverage: share of intervals holding the truth",
+    )
+    for column in (*(k.rsplit(".", 1)[-1] for k in varied), "point", "n", "bias", "sd", "RMSE",
+                   "max |err|", "coverage"):  # fmt: skip
+        table.add_column(column, justify="right", no_wrap=True)
+    for _, row in rows.iterrows():
+        table.add_row(
+            *(f"{row[k]}" for k in varied),
+            f"{row['direction']}/{row['delay_ms']:g}",
+            str(row["n_sessions"]),
+            *(f"{row[c]:+.2f}" if c == "bias_percent" else f"{row[c]:.2f}"
+              for c in ("bias_percent", "sd_percent", "rmse_percent", "abs_error_percent_max")),
+            f"{row['coverage']:.2f}",
+        )  # fmt: skip
+    Console().print(table)
+
+
+def _report_failures(failed: pd.DataFrame) -> None:
+    """Name the failed cells (they are in the tables too) and exit with code 1."""
+    if failed.empty:
+        return
+    for _, row in failed.head(5).iterrows():
+        typer.echo(f"warning: cell {row['cell']} (seed {row['seed']}) failed: {row['error']}",
+                   err=True)  # fmt: skip
+    typer.echo(f"warning: {len(failed)} sessions failed (see cells.csv)", err=True)
+    raise typer.Exit(1)
