@@ -4,8 +4,12 @@ A study preset. Pilot sessions of the foot the user describes are simulated at a
 counts (several seeds each, the unperturbed trials scaled along, as in paper 000's 400 for 100
 per point) and analysed as lab data. For every condition (direction and timing point) the
 stiffness interval the analysis reports (its ``ci95``, else ``mean ± 1.96 sd``: see
-:mod:`anklelab.studies.rows`) is fitted by ``half-width = c / sqrt(n)``, ``n`` the perturbed
-trials per timing point (random averages shrink so); then:
+:mod:`anklelab.studies.rows`) is fitted by ``half-width = c / sqrt(m)``, ``m`` the condition's
+perturbed trials (random averages shrink so). Each trial of a timing point is dorsiflexing or
+plantarflexing at random, so a condition gets a binomial share of the ``n`` trials per timing
+point; the design holds for the share a condition gets in 9 sessions of 10 (the binomial's 10th
+percentile ``m10(n)``, about ``n/2 - 0.64 sqrt(n)``): ``half-width(n) = c / sqrt(m10(n))``.
+Then:
 
 - **interval**: the smallest ``n`` whose predicted half-width is within ``±X %`` of the
   stiffness in *every* condition;
@@ -178,35 +182,39 @@ def _ratio(params_file: Path | None) -> float:
 
 
 def _answer(rows: Any, run: StudyRun, target: float, change: float, power: float) -> Design:
-    from scipy.stats import norm
+    from scipy.stats import binom, norm
 
     n = rows["twin.trials_per_point"].to_numpy(float)
-    rows = rows.assign(_inv=1.0 / np.sqrt(n))
+    # fit per condition against its own trial count (each trial of a timing point is dorsi or
+    # plantar at random: a condition gets about half); a bootstrap of fewer than 3 trials has
+    # no spread to measure
+    usable = rows[(rows["n_perturbed"] >= 3) & (rows["half_width_percent"] > 0)]
     conditions = []
-    for (direction, delay), group in rows.groupby(["direction", "delay_ms"], sort=True):
+    for (direction, delay), group in usable.groupby(["direction", "delay_ms"], sort=True):
         h = group["half_width_percent"].to_numpy(float)
-        x = group["_inv"].to_numpy(float)
-        keep = np.isfinite(h)
-        c = float(np.sum(h[keep] * x[keep]) / np.sum(x[keep] ** 2))  # least squares h = c x
-        conditions.append(
-            {"direction": direction, "delay_ms": float(delay), "c_percent": c,
-             "trials_needed": math.ceil((c / target) ** 2)}
-        )  # fmt: skip
+        x = 1.0 / np.sqrt(group["n_perturbed"].to_numpy(float))
+        c = float(np.sum(h * x) / np.sum(x**2))  # least squares h = c / sqrt(n)
+        conditions.append({"direction": direction, "delay_ms": float(delay), "c_percent": c})
+    if not conditions:
+        raise ParameterError("design: the pilot sessions are too small; give larger --pilot counts")
+    grid = np.arange(2, 20001)
+    share = np.maximum(binom.ppf(0.1, grid, 0.5), 1.0)  # a condition's trials, 9 sessions in 10
+    for cond in conditions:
+        cond["trials_needed"] = int(grid[np.argmax(cond["c_percent"] / np.sqrt(share) <= target)])
     widest = max(cond["c_percent"] for cond in conditions)
     for_interval = max(cond["trials_needed"] for cond in conditions)
-    z = norm.ppf(power) + 1.96
-    for_power = math.ceil((math.sqrt(2) * widest * z / (1.96 * change)) ** 2)
-    recommended = max(for_interval, for_power)
-    grid = np.arange(2, max(2 * recommended, int(n.max()) + 1) + 1)
-    half = widest / np.sqrt(grid)
+    half = widest / np.sqrt(share)
     shift = change / (math.sqrt(2) * half / 1.96)
     power_curve = norm.cdf(shift - 1.96) + norm.cdf(-shift - 1.96)
+    for_power = int(grid[np.argmax(power_curve >= power)])
+    recommended = max(for_interval, for_power)
+    shown = grid <= max(2 * recommended, int(n.max()) + 1)
     pilot = rows.groupby("twin.trials_per_point")
     widest_seen = rows.groupby(["twin.trials_per_point", "seed"])["half_width_percent"].max()
     curve = {
-        "trials_per_point": grid.tolist(),
-        "half_width_percent": half.tolist(),
-        "power": power_curve.tolist(),
+        "trials_per_point": grid[shown].tolist(),
+        "half_width_percent": half[shown].tolist(),
+        "power": power_curve[shown].tolist(),
         "target_percent": target,
         "change_percent": change,
         "target_power": power,

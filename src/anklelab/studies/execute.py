@@ -166,7 +166,8 @@ def _run_local(
         _environment(_ONE_THREAD),
         ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context("spawn")) as pool,
     ):
-        dask.multiprocessing.get(graph, list(graph), pool=pool, callbacks=callbacks)
+        # chunksize 1: each result comes back (and is written) as soon as it is done
+        dask.multiprocessing.get(graph, list(graph), pool=pool, callbacks=callbacks, chunksize=1)
 
 
 def _run_distributed(

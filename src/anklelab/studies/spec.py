@@ -361,7 +361,8 @@ def _validate_cells(study: Study, origin: str) -> None:
             base.replace(cell.params)
             WalkingSettings().replace(cell.analysis)
         except ParameterError as exc:
-            raise ParameterError(f"{where}: {exc}") from None
+            reason = " ".join(str(exc).replace("replace(): invalid parameters:", "").split())
+            raise ParameterError(f"{where}: {reason}") from None
 
 
 def _jsonable(value: Any) -> Any:
