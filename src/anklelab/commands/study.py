@@ -90,20 +90,22 @@ def _print_summary(summary: pd.DataFrame, varied: list[str], results: pd.DataFra
     table = Table(
         box=box.SIMPLE_HEAD,
         title="stiffness error over seeds, % of truth",
-        caption=f"interval: {kinds}; coverage: share of intervals holding the truth",
+        caption=f"point: d(orsi)/p(lantar) and timing point, ms; max: largest |error|; "
+        f"cover: share of the intervals ({kinds}) holding the truth",
     )
-    for column in (*(k.rsplit(".", 1)[-1] for k in varied), "point", "n", "bias", "sd", "RMSE",
-                   "max |err|", "coverage"):  # fmt: skip
+    for key in varied:
+        table.add_column(key.rsplit(".", 1)[-1], justify="right", overflow="fold")
+    for column in ("point", "n", "bias", "sd", "RMSE", "max", "cover"):
         table.add_column(column, justify="right", no_wrap=True)
     for _, row in rows.iterrows():
         table.add_row(
-            *(f"{row[k]}" for k in varied),
-            f"{row['direction']}/{row['delay_ms']:g}",
+            *(f"{row[k]:g}" if isinstance(row[k], float) else str(row[k]) for k in varied),
+            f"{row['direction'][0]}{row['delay_ms']:g}",
             str(row["n_sessions"]),
-            *(f"{row[c]:+.2f}" if c == "bias_percent" else f"{row[c]:.2f}"
-              for c in ("bias_percent", "sd_percent", "rmse_percent", "abs_error_percent_max")),
+            f"{row['bias_percent']:+.2f}",
+            *(f"{row[c]:.2f}" for c in ("sd_percent", "rmse_percent", "abs_error_percent_max")),
             f"{row['coverage']:.2f}",
-        )  # fmt: skip
+        )
     Console().print(table)
 
 

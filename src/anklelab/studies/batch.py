@@ -57,20 +57,20 @@ class BatchRun:
     ran: int
 
 
-def analyse_session_file(path: str, settings: dict[str, Any]) -> dict[str, Any]:
+def analyse_session_file(path: str, settings: WalkingSettings) -> dict[str, Any]:
     """Read and analyse one session (in a worker); its results document and CSV rows."""
     import warnings
 
     from anklelab.data import load_session, session_hash
     from anklelab.errors import AnklelabWarning
-    from anklelab.pipelines.walking import WalkingSettings, analyze_walking
+    from anklelab.pipelines.walking import analyze_walking
 
     start = time.perf_counter()
     session = load_session(path)
     read = time.perf_counter()
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", AnklelabWarning)
-        results = analyze_walking(session, WalkingSettings.model_validate(settings))
+        results = analyze_walking(session, settings)
     document = results.to_dict(session=Path(path).name, session_sha256=session_hash(path))
     return {
         "subject": session.info.subject,
@@ -143,7 +143,7 @@ def run_batch(
     store = ResultStore(out / "cells")
     tasks = list(
         {
-            k: Task(k, analyse_session_file, (str(p), config))
+            k: Task(k, analyse_session_file, (str(p), settings))
             for k, p in zip(keys, paths, strict=True)
         }.values()
     )
