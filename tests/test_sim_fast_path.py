@@ -53,7 +53,9 @@ def test_threads_change_no_bit_of_the_session():
     kwargs = dict(trials_per_point=2, n_unperturbed=3, n_calibration=1, bench=False, seed=4)
     one = simulate_perturberator(threads=1, **kwargs)
     two = simulate_perturberator(threads=2, **kwargs)
-    for a, b in zip((*one.calibration, *one.walking), (*two.calibration, *two.walking), strict=True):
+    for a, b in zip(
+        (*one.calibration, *one.walking), (*two.calibration, *two.walking), strict=True
+    ):
         a = getattr(a, "recording", a)
         b = getattr(b, "recording", b)
         for name, values in a.columns.items():

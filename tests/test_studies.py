@@ -25,6 +25,7 @@ from anklelab.studies import (
 )
 from anklelab.studies.tables import results_table, summary_table
 
+ROOT = Path(__file__).resolve().parents[1]
 TINY = {
     "name": "tiny",
     "seeds": [0, 1],
@@ -129,7 +130,7 @@ def reference(tmp_path_factory):
 
 
 def test_the_study_table_holds_truth_estimate_interval_error_and_coverage(reference):
-    out, run = reference
+    out, _ = reference
     table = pd.read_parquet(out / "results.parquet")
     assert set(table["quantity"]) == {
         "stiffness_nm_per_rad", "damping_nms_per_rad", "inertia_kgm2", "cop_m"
@@ -233,3 +234,29 @@ def test_batch_analyses_sessions_into_a_group_table(tmp_path):
     for name in ("S0-day1", "S1-day1"):
         assert (tmp_path / "out" / "sessions" / name / "results.json").is_file()
     assert (tmp_path / "out" / "figures" / "stiffness_pooled.png").is_file()
+
+
+EXAMPLE_STUDIES = sorted(
+    (Path(__file__).resolve().parents[1] / "examples" / "studies").glob("*.toml")
+)
+
+
+@pytest.mark.parametrize("path", EXAMPLE_STUDIES, ids=lambda p: p.name)
+def test_example_study_files_are_valid_studies(path):
+    from anklelab.studies import load_study
+
+    study = load_study(path)
+    assert study.varied and len(study.cells()) >= 9
+
+
+def test_a_bad_study_file_ends_in_one_error_line_and_exit_code_2(tmp_path):
+    bad = tmp_path / "bad.toml"
+    bad.write_text(TINY_TOML.replace("[twin]", "colour = 1\n[twin]"), encoding="utf-8")
+    proc = subprocess.run(
+        [sys.executable, "-c", "from anklelab.cli import run; run()", "study", str(bad),
+         "--out", str(tmp_path / "out")],
+        capture_output=True, text=True,
+    )  # fmt: skip
+    assert proc.returncode == 2
+    assert proc.stderr.strip().splitlines() == [f"error: {bad}: colour: unknown key"]
+    assert not (tmp_path / "out").exists()
