@@ -3,6 +3,7 @@ and analysing recorded data imports neither numba nor the twin."""
 
 from __future__ import annotations
 
+import os
 import subprocess
 import sys
 
@@ -72,3 +73,31 @@ def test_analysing_recorded_data_imports_no_numba_and_no_twin():
     )
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert out.stdout.strip() == "[]"
+
+
+def _needs_compiling(cache: str | None) -> str:
+    env = dict(os.environ)
+    if cache is not None:
+        env["NUMBA_CACHE_DIR"] = cache
+    code = "from anklelab.sim.drivetrain import kernel_needs_compiling as k; print(k())"
+    out = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True)
+    return out.stdout.strip()
+
+
+def test_a_fresh_install_knows_it_must_compile_and_a_warm_one_does_not(tmp_path):
+    simulate_perturberator(trials_per_point=1, n_unperturbed=1, n_calibration=0, bench=False)
+    assert _needs_compiling(str(tmp_path / "empty-cache")) == "True"
+    assert _needs_compiling(os.environ.get("NUMBA_CACHE_DIR")) == "False"
+
+
+def test_compiling_is_announced_on_one_progress_line(monkeypatch):
+    from anklelab.commands import _kernels
+    from anklelab.platforms import load_platform
+    from anklelab.sim import drivetrain
+
+    shown = []
+    monkeypatch.setattr(drivetrain, "kernel_needs_compiling", lambda: True)
+    _kernels.prepare_kernel(
+        load_platform("perturberator"), lambda text: shown.append(text) or (lambda *_: None)
+    )
+    assert shown == ["compiling simulation kernels, once"]

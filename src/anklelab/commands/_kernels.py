@@ -17,9 +17,12 @@ def prepare_kernel(
     numba caches the compiled kernel on disk, so this happens once per install (and after an
     upgrade); every later run loads it in a fraction of a second and prints nothing.
     """
-    from anklelab.sim.drivetrain import compile_kernel, kernel_needs_compiling
+    from anklelab.experiments import simulate_perturberator
+    from anklelab.sim.drivetrain import kernel_needs_compiling
 
     if kernel_needs_compiling():
         progress = task("compiling simulation kernels, once")
-        compile_kernel(params)
+        # a walking protocol of four one-trial points: the platform kernel and the trigger's
+        simulate_perturberator(params, trials_per_point=1, n_unperturbed=1, n_calibration=0,
+                               bench=False, time_courses=False, threads=1)  # fmt: skip
         progress(1, 1)

@@ -65,7 +65,6 @@ __all__ = [
     "EncoderFault",
     "FootLoad",
     "PlatformRun",
-    "compile_kernel",
     "default_threads",
     "dynamic_brake_nms_per_rad",
     "kernel_needs_compiling",
@@ -396,12 +395,6 @@ def kernel_needs_compiling() -> bool:
         return not K.run_batch._cache._cache_file._load_index()
     except Exception:  # numba internals: never fail a simulation over a notice
         return False
-
-
-def compile_kernel(params: PerturberatorParameters) -> None:
-    """Compile (or load from numba's cache) the kernel, on a two-tick run of one trial."""
-    load = FootLoad(np.zeros((1, K.N_G, 2)), 1000.0, np.ones((1, K.N_FP)))
-    simulate_platform(params, np.zeros((1, 2)), load=load, threads=1)
 
 
 def stopping_distance(
