@@ -392,7 +392,7 @@ def kernel_needs_compiling() -> bool:
     if K.run_batch.signatures:
         return False
     try:
-        return not K.run_batch._cache._cache_file._load_index()
+        return not K.run_batch._cache._cache_file._load_index()  # type: ignore[attr-defined]
     except Exception:  # numba internals: never fail a simulation over a notice
         return False
 

@@ -102,9 +102,10 @@ def run_cell(cell: Cell, *, threads: int | None = 1) -> dict[str, Any]:
         warnings.simplefilter("ignore", AnklelabWarning)
         results = analyze_walking(session, settings)
     document = results.to_dict(session=f"cell {cell.key}")
-    rows = timing_point_rows(document, session.truth["reference"])
-    if session.truth.get("draw"):
-        draw = {f"draw.{k}": v for k, v in session.truth["draw"].items()}
+    truth = session.truth or {}
+    rows = timing_point_rows(document, truth["reference"])
+    if truth.get("draw"):
+        draw = {f"draw.{k}": v for k, v in truth["draw"].items()}
         rows = [draw | row for row in rows]
     return {
         "rows": rows,

@@ -40,7 +40,8 @@ def study_figures(
     directory.mkdir(parents=True, exist_ok=True)
     rows = summary[summary["quantity"] == "stiffness_nm_per_rad"]
     written = []
-    for key in varied or [None]:
+    keys: list[str | None] = [*varied] if varied else [None]
+    for key in keys:
         x_key = key or "delay_ms"
         others = [k for k in varied if k != key]
         fig, (ax_bias, ax_rmse) = plt.subplots(1, 2, figsize=(10, 4), constrained_layout=True)

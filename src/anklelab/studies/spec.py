@@ -175,7 +175,7 @@ class Study:
 
     def cells(self) -> list[Cell]:
         """Every (point, seed), seeds innermost."""
-        out = []
+        out: list[Cell] = []
         for point in self.points():
             settings = self.fixed | point
             split: dict[str, dict[str, Any]] = {prefix: {} for prefix in PREFIXES}
@@ -253,7 +253,7 @@ def _flatten(table: dict[str, Any], prefix: str) -> dict[str, Any]:
     """``params`` nests sections (``[params.geometry]``); the other tables are flat."""
     if prefix != "params":
         return table
-    out = {}
+    out: dict[str, Any] = {}
     for key, value in table.items():
         if isinstance(value, dict):
             out |= {f"{key}.{k}": v for k, v in _flatten(value, prefix).items()}
