@@ -1,4 +1,10 @@
-"""Controllers, trajectories, observers and safety limits (DESIGN.md section 2, ``control``)."""
+"""Controllers, trajectories, observers and safety limits (DESIGN.md section 2, ``control``).
+
+The servo-loop measurement tools (:mod:`anklelab.control.servo`) load on first use: they need
+``scipy.signal``, which would otherwise cost every simulation a second of imports.
+"""
+
+from typing import Any
 
 from anklelab.control.haptics import (
     TerrainProfile,
@@ -26,17 +32,6 @@ from anklelab.control.safety import (
     SafetyMonitor,
     new_safety_state,
     safety_update,
-)
-from anklelab.control.servo import (
-    CascadeGains,
-    LoopMargins,
-    bandwidth_hz,
-    fit_second_order,
-    loop_margins,
-    periodic_frf,
-    phase_crossing_hz,
-    prbs,
-    second_order_response,
 )
 from anklelab.control.trigger import (
     onset_updates,
@@ -80,3 +75,23 @@ __all__ = [
     "second_order_response",
     "trigger_updates",
 ]
+
+_SERVO_NAMES = (
+    "CascadeGains",
+    "LoopMargins",
+    "bandwidth_hz",
+    "fit_second_order",
+    "loop_margins",
+    "periodic_frf",
+    "phase_crossing_hz",
+    "prbs",
+    "second_order_response",
+)
+
+
+def __getattr__(name: str) -> Any:
+    if name in _SERVO_NAMES:
+        from anklelab.control import servo
+
+        return getattr(servo, name)
+    raise AttributeError(f"module 'anklelab.control' has no attribute {name!r}")
