@@ -14,12 +14,12 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from anklelab.cli import app
+from anklelab._runs import RunManifest
 from anklelab.errors import ParameterError
 from anklelab.studies import (
     attempt,
+    checkpoint_for,
     design_trials,
-    run_batch,
     run_study,
     study_from_mapping,
 )
@@ -59,13 +59,14 @@ def test_a_grid_expands_to_every_combination_times_every_seed():
 
 def test_a_sample_is_drawn_from_its_own_seed():
     doc = {k: v for k, v in TINY.items() if k != "grid"} | {
+        "twin": {"n_unperturbed": 6, "n_calibration": 2, "bench": False},
         "sample": {
             "n": 4,
             "seed": 3,
             "params.geometry.misalignment_anterior_m": {"uniform": [0.0, 0.02]},
             "twin.trials_per_point": {"integers": [3, 5]},
             "twin.foot": {"choice": ["prosthetic", "human"]},
-        }
+        },
     }
     first = study_from_mapping(doc, origin="s").points()
     assert first == study_from_mapping(doc, origin="s").points()
@@ -83,6 +84,9 @@ def test_a_sample_is_drawn_from_its_own_seed():
         ({"grid": {"params.geometry.misalignment_anterior": [0.0]}}, "did you mean"),
         ({"seeds": 0}, "seeds: expected a count"),
         ({"twin": {"foot": "robot"}}, "foot"),
+        ({"grid": {"analysis.window_ms": [75.0, float("nan")]}}, r"window_ms\[1\]: .*finite"),
+        ({"grid": {"twin.trials_per_point": [3, 5]}}, "fixed setting and in \\[grid\\]"),
+        ({"grid": 1.5}, "\\[grid\\]: expected a table"),
     ],
 )
 def test_a_bad_study_file_is_one_clear_error_naming_the_key(change, match):
@@ -106,9 +110,10 @@ def test_a_failing_task_is_retried_then_recorded_with_its_error():
 
 def test_a_failed_cell_stays_in_the_tables():
     row = {"direction": "dorsi", "delay_ms": 100.0, "n_perturbed": 3, "quantity": "cop_m",
-           "truth": 0.06, "estimate": 0.061, "sd": np.nan, "low": np.nan, "high": np.nan,
-           "interval_kind": "", "error": 0.001, "error_percent": 1.0 / 0.6,
-           "half_width_percent": np.nan, "covered": None, "flags": "", "warnings": ""}  # fmt: skip
+           "truth": 0.06, "estimate": 0.061, "sd": np.nan, "ci95_low": np.nan,
+           "ci95_high": np.nan, "interval_kind": "", "error": 0.001, "error_percent": 1.0 / 0.6,
+           "half_width_percent": np.nan, "covered": None, "poorly_determined": None,
+           "warnings": ""}  # fmt: skip
     records = [
         ({"cell": "a", "cell_index": 0, "seed": 0, "x": 1.0}, {"ok": True, "rows": [row]}),
         ({"cell": "b", "cell_index": 1, "seed": 1, "x": 1.0}, {"ok": False, "error": "E: x"}),
@@ -132,15 +137,26 @@ def reference(tmp_path_factory):
 def test_the_study_table_holds_truth_estimate_interval_error_and_coverage(reference):
     out, _ = reference
     table = pd.read_parquet(out / "results.parquet")
-    assert set(table["quantity"]) == {
-        "stiffness_nm_per_rad", "damping_nms_per_rad", "inertia_kgm2", "cop_m"
+    assert set(table["quantity"]) >= {
+        "stiffness_nm_per_rad", "damping_nms_per_rad", "inertia_kgm2", "vaf_percent",
+        "stiffness_change_fraction", "cop_m",
     }  # fmt: skip
     stiffness = table[table["quantity"] == "stiffness_nm_per_rad"]
-    assert (stiffness["interval_kind"] == "mean±1.96sd").all()
+    # the analysis's 95 % interval; a condition of one trial has none: mean ± 1.96 sd, named so
+    assert set(stiffness["interval_kind"]) == {"ci95", "mean±1.96sd"}
+    single = stiffness[stiffness["interval_kind"] == "mean±1.96sd"]
+    assert (single["n_perturbed"] == 1).all()
+    assert (stiffness["ci95_low"] <= stiffness["ci95_high"]).all()
+    assert set(stiffness["stiffness_model"]) <= {"constant", "linear"}
+    assert stiffness["poorly_determined"].isin([True, False]).all()
+    assert table.loc[table["quantity"] == "cop_m", "poorly_determined"].isna().all()
+    change = table[table["quantity"] == "stiffness_change_fraction"]
+    assert change["truth"].notna().all()  # the twin's within-window change, for the estimate
     np.testing.assert_allclose(stiffness["error"], stiffness["estimate"] - stiffness["truth"])
     assert stiffness["error_percent"].abs().max() < 25  # tiny sessions, but the right answer
     summary = pd.read_csv(out / "summary.csv")
-    assert {"bias_percent", "sd_percent", "rmse_percent", "coverage"} <= set(summary.columns)
+    assert {"bias_percent", "sd_percent", "rmse_percent", "coverage",
+            "poorly_determined_fraction"} <= set(summary.columns)  # fmt: skip
     assert (out / "figures" / "stiffness_error_vs_misalignment_anterior_m.png").is_file()
     assert len(pd.read_csv(out / "cells.csv")) == 4
 
@@ -161,7 +177,7 @@ def test_a_killed_study_resumes_to_the_same_table(reference, tmp_path):
     command = [sys.executable, "-c", "from anklelab.cli import run; run()", "study",
                str(study_file), "--out", str(target), "--workers", "1", "--no-figures"]  # fmt: skip
     proc = subprocess.Popen(command, start_new_session=True, stderr=subprocess.DEVNULL)
-    cells = target / "cells"
+    cells = checkpoint_for(target)
     deadline = time.monotonic() + 240
     while time.monotonic() < deadline and len(list(cells.glob("*.json"))) < 1:
         time.sleep(0.2)
@@ -169,22 +185,33 @@ def test_a_killed_study_resumes_to_the_same_table(reference, tmp_path):
     proc.wait()
     done = len(list(cells.glob("*.json")))
     assert 1 <= done < 4, f"{done} cells written before the kill"
-    assert not (target / "results.csv").exists()
+    assert not target.exists()  # the output appears only when the study completes
     resumed = subprocess.run(command, capture_output=True, text=True, timeout=600)
     assert resumed.returncode == 0, resumed.stderr
     assert f"({done} already done, {4 - done} run)" in resumed.stdout
     assert (target / "results.csv").read_bytes() == (out / "results.csv").read_bytes()
+    assert not cells.exists() and len(list((target / "cells").glob("*.json"))) == 4
+    manifest = RunManifest.load(target)
+    assert manifest.command == "study" and "results.parquet" in manifest.files
+    assert manifest.settings["study"]["seeds"] == [0, 1]
+    again = subprocess.run(command, capture_output=True, text=True, timeout=60)
+    assert again.returncode == 2
+    refused = f"error: --out {target}: already exists; pass --force to replace it"
+    assert again.stderr.strip() == refused
 
 
-def test_another_study_in_the_same_directory_needs_force(reference, tmp_path):
-    out, _ = reference
+def test_a_directory_that_is_no_study_output_is_never_replaced(reference, tmp_path):
+    out, _ = reference  # written by run_study itself: no run.json
     study_file = tmp_path / "other.toml"
     study_file.write_text(TINY_TOML.replace("[0, 1]", "[5]"), encoding="utf-8")
-    from typer.testing import CliRunner
-
-    result = CliRunner().invoke(app, ["study", str(study_file), "--out", str(out)])
-    assert result.exit_code != 0
-    assert "holds the results of another run" in str(result.exception)
+    proc = subprocess.run(
+        [sys.executable, "-c", "from anklelab.cli import run; run()", "study", str(study_file),
+         "--out", str(out), "--force"],
+        capture_output=True, text=True, timeout=60,
+    )  # fmt: skip
+    assert proc.returncode == 2
+    assert "not replaced: it has no run.json" in proc.stderr
+    assert not checkpoint_for(out).exists()
 
 
 def test_design_recommendation_reaches_the_target_when_simulated(tmp_path):
@@ -211,9 +238,11 @@ def test_design_recommendation_reaches_the_target_when_simulated(tmp_path):
 
 
 def test_batch_analyses_sessions_into_a_group_table(tmp_path):
+    from typer.testing import CliRunner
+
+    from anklelab.cli import app
     from anklelab.data import save_session
     from anklelab.experiments import simulate_perturberator
-    from anklelab.pipelines.walking import WalkingSettings
 
     paths = []
     for i, foot in enumerate(("prosthetic", "human")):
@@ -222,18 +251,27 @@ def test_batch_analyses_sessions_into_a_group_table(tmp_path):
         paths.append(save_session(session, tmp_path / f"S{i}" / "day1.h5"))
     broken = tmp_path / "S9" / "day1"
     broken.mkdir(parents=True)
-    run = run_batch([*paths, broken], tmp_path / "out", workers=1,
-                    settings=WalkingSettings(bootstrap_reps=10))  # fmt: skip
-    assert set(run.names.values()) == {"S0-day1", "S1-day1", "S9-day1"}
-    assert list(run.failed) == ["S9-day1"] and "session.toml" in run.failed["S9-day1"]
-    group = pd.read_csv(tmp_path / "out" / "group.csv")
+    settings = tmp_path / "settings.toml"
+    settings.write_text("bootstrap_reps = 10\n")
+    out = tmp_path / "out"
+    args = ["batch", *map(str, [*paths, broken]), "--out", str(out), "--workers", "1",
+            "--settings", str(settings)]  # fmt: skip
+    result = CliRunner().invoke(app, args)
+    assert result.exit_code == 1, result.output  # one session failed, named
+    assert "warning: S9-day1:" in result.output and "session.toml" in result.output
+    group = pd.read_csv(out / "group.csv")
     assert set(group.loc[group["status"] == "ok", "subject"]) == {"twin-prosthetic", "twin-human"}
     assert (group["status"] == "failed").sum() == 1
-    pooled = pd.read_csv(tmp_path / "out" / "pooled.csv")
+    assert {"ci95_low", "ci95_high", "sd", "poorly_determined", "stiffness_model"} <= set(group)
+    pooled = pd.read_csv(out / "pooled.csv")
     assert (pooled["n_subjects"] <= 2).all() and (pooled["n_subjects"] == 2).any()
     for name in ("S0-day1", "S1-day1"):
-        assert (tmp_path / "out" / "sessions" / name / "results.json").is_file()
-    assert (tmp_path / "out" / "figures" / "stiffness_pooled.png").is_file()
+        assert (out / "sessions" / name / "results.json").is_file()
+    assert (out / "figures" / "stiffness_pooled.png").is_file()
+    manifest = RunManifest.load(out)
+    assert manifest.command == "batch" and manifest.settings["bootstrap_reps"] == 10
+    recorded = {Path(i["path"]).name for i in manifest.inputs}
+    assert {"day1.h5", "settings.toml"} <= recorded and not checkpoint_for(out).exists()
 
 
 EXAMPLE_STUDIES = sorted(

@@ -7,12 +7,13 @@ from typing import Annotated
 
 import typer
 
-from anklelab.commands._options import SettingsOption
+from anklelab.commands._options import ForceOption, SettingsOption
 from anklelab.commands.study import (
-    ForceOption,
+    FiguresOption,
     RetriesOption,
     SchedulerOption,
     WorkersOption,
+    resumable_output,
 )
 
 __all__ = ["batch"]
@@ -29,33 +30,43 @@ def batch(
     workers: WorkersOption = None,
     retries: RetriesOption = 0,
     force: ForceOption = False,
-    figures: Annotated[
-        bool, typer.Option("--figures/--no-figures", help="Write PNG figures.")
-    ] = True,
+    figures: FiguresOption = True,
 ) -> None:
     """Analyse every session with the same settings; per-session results and a group table.
 
     Writes OUT/sessions/NAME/results.json and results.csv per session, OUT/group.parquet and
     .csv (one row per session, timing point and quantity, with the subject), OUT/pooled.parquet
-    and .csv (mean over subjects with a 95 % interval) and OUT/figures/. A session that cannot
-    be analysed is reported with its reason; the others go on.
+    and .csv (mean over subjects with a 95 % interval), OUT/figures/ and OUT/run.json. A
+    session that cannot be analysed is reported with its reason; the others go on. OUT appears
+    when the batch completes; run the same command again to resume a batch that was stopped.
     """
+    from anklelab.commands._options import session_input
     from anklelab.commands._progress import recording_progress
     from anklelab.pipelines.walking import load_walking_settings
     from anklelab.studies import run_batch
 
+    for path in sessions:
+        session_input(path)
     settings = load_walking_settings(settings_file)
-    with recording_progress() as task:
-        run = run_batch(
-            sessions, out, settings=settings, scheduler=scheduler, workers=workers,
-            retries=retries, force=force, figures=figures, progress=task("sessions"),
+    inputs = [*sessions, *([settings_file] if settings_file else [])]
+    with (
+        resumable_output(out, command="batch", force=force, inputs=inputs) as (run, store),
+        recording_progress() as task,
+    ):
+        result = run_batch(
+            sessions, run.directory, settings=settings, store=store, scheduler=scheduler,
+            workers=workers, retries=retries, figures=figures, progress=task("sessions"),
         )  # fmt: skip
-    n_subjects = run.group.loc[run.group["status"] == "ok", "subject"].nunique()
+        run.settings.update(settings.model_dump(mode="json"), figures=figures)
+        for path, sha256 in result.inputs.items():
+            run.add_input(Path(path), sha256)
+        run.add_input(settings_file)
+    n_subjects = result.group.loc[result.group["status"] == "ok", "subject"].nunique()
     typer.echo(
-        f"{len(sessions) - len(run.failed)} of {len(sessions)} sessions analysed "
+        f"{len(sessions) - len(result.failed)} of {len(sessions)} sessions analysed "
         f"({n_subjects} subjects); group table in {out / 'group.csv'}"
     )
-    for name, error in run.failed.items():
+    for name, error in result.failed.items():
         typer.echo(f"warning: {name}: {error}", err=True)
-    if run.failed:
+    if result.failed:
         raise typer.Exit(1)

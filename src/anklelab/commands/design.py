@@ -8,8 +8,8 @@ from typing import Annotated
 
 import typer
 
-from anklelab.commands._options import SettingsOption
-from anklelab.commands.study import ForceOption, SchedulerOption, WorkersOption
+from anklelab.commands._options import ForceOption, SettingsOption, finite
+from anklelab.commands.study import SchedulerOption, WorkersOption, resumable_output
 
 __all__ = ["design"]
 
@@ -31,12 +31,30 @@ def design(
         ),
     ] = None,
     interval: Annotated[
-        float, typer.Option(help="Target stiffness interval half-width, % (±X %).")
+        float,
+        typer.Option(
+            help="Target stiffness interval half-width, % (±X %).",
+            min=0,
+            callback=finite,
+        ),
     ] = 3.0,
     change: Annotated[
-        float, typer.Option(help="Stiffness change between timing points to detect, %.")
+        float,
+        typer.Option(
+            help="Stiffness change between timing points to detect, %.",
+            min=0,
+            callback=finite,
+        ),
     ] = 10.0,
-    power: Annotated[float, typer.Option(help="Power to detect that change (0-1).")] = 0.8,
+    power: Annotated[
+        float,
+        typer.Option(
+            help="Power to detect that change (between 0 and 1).",
+            min=0,
+            max=1,
+            callback=finite,
+        ),
+    ] = 0.8,
     pilot: Annotated[
         str, typer.Option(help="Trials per timing point of the pilot sessions, comma-separated.")
     ] = "10,20,40",
@@ -50,32 +68,43 @@ def design(
     change between timing points, from pilot sessions of the twin.
 
     Prints the curve and the recommended number; writes OUT/design.json,
-    OUT/figures/design.png and the pilot study's tables.
+    OUT/figures/design.png, the pilot study's tables and OUT/run.json.
     """
     from anklelab.commands._kernels import prepare_kernel
     from anklelab.commands._progress import recording_progress
     from anklelab.errors import ParameterError
+    from anklelab.pipelines.walking import load_walking_settings
     from anklelab.platforms import load_platform
     from anklelab.studies import design_trials
+    from anklelab.studies.design import check_targets
 
     try:
         counts = [int(n) for n in pilot.split(",")]
     except ValueError:
         raise ParameterError(f"--pilot: expected counts like 10,20,40, got {pilot!r}") from None
+    check_targets(interval, change, power, counts, seeds)
+    parameters = load_platform("perturberator", params)
     analysis = {}
-    if settings_file is not None:
-        from anklelab._params import read_parameter_document
-
-        analysis = read_parameter_document(settings_file, "toml", what="settings file")
-    with recording_progress() as task:
+    if settings_file is not None:  # checked now, not in every pilot session
+        analysis = load_walking_settings(settings_file).model_dump(mode="json")
+    inputs = [p for p in (params, settings_file) if p is not None]
+    with (
+        resumable_output(out, command="design", force=force, inputs=inputs) as (run, store),
+        recording_progress() as task,
+    ):
         if scheduler is None:
-            prepare_kernel(load_platform("perturberator", params), task)
+            prepare_kernel(parameters, task)
         result = design_trials(
-            out, foot=foot.value, params_file=params, interval_percent=interval,
+            run.directory, foot=foot.value, params_file=params, interval_percent=interval,
             change_percent=change, power=power, pilot=counts, seeds=seeds, analysis=analysis,
-            scheduler=scheduler, workers=workers, force=force,
-            progress=task("pilot sessions"),
+            store=store, scheduler=scheduler, workers=workers, progress=task("pilot sessions"),
         )  # fmt: skip
+        run.settings.update(
+            foot=foot.value, interval_percent=interval, change_percent=change, power=power,
+            pilot=counts, seeds=seeds, analysis=analysis,
+        )  # fmt: skip
+        run.add_input(params)
+        run.add_input(settings_file)
     _print_curve(result.curve, result.interval_kind)
     typer.echo(
         f"recommended: {result.recommended} perturbed trials per timing point "

@@ -2,15 +2,29 @@
 
 from __future__ import annotations
 
+import shutil
+from collections.abc import Iterator, Sequence
+from contextlib import contextmanager
 from pathlib import Path
 from typing import TYPE_CHECKING, Annotated
 
 import typer
 
+from anklelab.commands._options import ForceOption
+
 if TYPE_CHECKING:
     import pandas as pd
 
-__all__ = ["ForceOption", "RetriesOption", "SchedulerOption", "WorkersOption", "study"]
+    from anklelab.commands._files import Run
+
+__all__ = [
+    "FiguresOption",
+    "RetriesOption",
+    "SchedulerOption",
+    "WorkersOption",
+    "resumable_output",
+    "study",
+]
 
 SchedulerOption = Annotated[
     str | None,
@@ -29,12 +43,6 @@ WorkersOption = Annotated[
 RetriesOption = Annotated[
     int, typer.Option(help="Extra tries of a task that fails, before it is reported.", min=0)
 ]
-ForceOption = Annotated[
-    bool,
-    typer.Option(
-        "--force", help="Write into a directory holding other files or another run (restart)."
-    ),
-]
 FiguresOption = Annotated[bool, typer.Option("--figures/--no-figures", help="Write PNG figures.")]
 
 
@@ -52,30 +60,57 @@ def study(
     """Simulate and analyse every cell of a study (twin settings x analysis settings x seeds).
 
     Writes OUT/results.parquet and .csv (one row per session, timing point and quantity: truth,
-    estimate, interval, error, coverage), OUT/summary.parquet and .csv (bias, sd, RMSE,
-    coverage per cell), OUT/cells.csv (status, error and times per session) and
-    OUT/figures/. Run again with the same OUT to resume a study that was stopped.
+    estimate, 95 % interval, the paper's sd, error, coverage, poorly determined, stiffness
+    model), OUT/summary.parquet and .csv (bias, sd, RMSE, coverage per cell), OUT/cells.csv
+    (status, error and times per session), OUT/cells/ (each session's result), OUT/figures/ and
+    OUT/run.json. OUT appears when the study completes; run the same command again to resume
+    a study that was stopped.
     """
+    from anklelab.commands._files import check_input
     from anklelab.commands._kernels import prepare_kernel
     from anklelab.commands._progress import recording_progress
     from anklelab.platforms import load_platform
     from anklelab.studies import load_study, run_study
-    from anklelab.studies.study import file_sha256
 
-    spec = load_study(study_file)
-    with recording_progress() as task:
+    spec = load_study(check_input(study_file, what="a study file (TOML)", kinds=("file",)))
+    with (
+        resumable_output(out, command="study", force=force, inputs=[study_file]) as (run, store),
+        recording_progress() as task,
+    ):
         if scheduler is None:  # local workers share this machine's kernel cache
             prepare_kernel(load_platform("perturberator"), task)
-        run = run_study(
-            spec, out, study_sha256=file_sha256(study_file), scheduler=scheduler,
-            workers=workers, retries=retries, force=force, figures=figures,
-            progress=task(f"{spec.name}: sessions"),
+        result = run_study(
+            spec, run.directory, store=store, scheduler=scheduler, workers=workers,
+            retries=retries, figures=figures, progress=task(f"{spec.name}: sessions"),
         )  # fmt: skip
-    _print_summary(run.summary, spec.varied, run.results)
+        run.settings.update(study=spec.describe(), retries=retries, figures=figures)
+        run.add_input(study_file)
+    _print_summary(result.summary, spec.varied, result.results)
     typer.echo(
-        f"{len(run.cells)} sessions ({run.resumed} already done, {run.ran} run); results in {out}"
+        f"{len(result.cells)} sessions ({result.resumed} already done, {result.ran} run); "
+        f"results in {out}"
     )
-    _report_failures(run.failed)
+    _report_failures(result.failed)
+
+
+@contextmanager
+def resumable_output(
+    out: Path, *, command: str, force: bool, inputs: Sequence[Path]
+) -> Iterator[tuple[Run, Path]]:
+    """The checked, locked output directory of ``command`` and the store its tasks resume from.
+
+    Yields the run (see :func:`anklelab.commands._files.output_directory`: OUT is built under a
+    temporary name and appears, with its run.json, only when the command completes) and the
+    store of finished tasks kept beside OUT (:func:`anklelab.studies.checkpoint_for`), which
+    outlives a stopped run and is removed once OUT is in place.
+    """
+    from anklelab.commands._files import output_directory
+    from anklelab.studies import checkpoint_for
+
+    store = checkpoint_for(out)
+    with output_directory(out, command=command, force=force, inputs=inputs) as run:
+        yield run, store
+    shutil.rmtree(store, ignore_errors=True)
 
 
 def _print_summary(summary: pd.DataFrame, varied: list[str], results: pd.DataFrame) -> None:

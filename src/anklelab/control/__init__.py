@@ -4,6 +4,7 @@ The servo-loop measurement tools (:mod:`anklelab.control.servo`) load on first u
 ``scipy.signal``, which would otherwise cost every simulation a second of imports.
 """
 
+from importlib import import_module
 from typing import Any
 
 from anklelab.control.haptics import (
@@ -76,22 +77,11 @@ __all__ = [
     "trigger_updates",
 ]
 
-_SERVO_NAMES = (
-    "CascadeGains",
-    "LoopMargins",
-    "bandwidth_hz",
-    "fit_second_order",
-    "loop_margins",
-    "periodic_frf",
-    "phase_crossing_hz",
-    "prbs",
-    "second_order_response",
-)
-
 
 def __getattr__(name: str) -> Any:
-    if name in _SERVO_NAMES:
-        from anklelab.control import servo
-
-        return getattr(servo, name)
+    """The servo-loop tools (the names of :mod:`anklelab.control.servo`), loaded on first use."""
+    if not name.startswith("_"):  # introspection (``__wrapped__``...) never loads SciPy
+        servo = import_module("anklelab.control.servo")  # not `from . import`: that recurses
+        if name in servo.__all__:
+            return getattr(servo, name)
     raise AttributeError(f"module 'anklelab.control' has no attribute {name!r}")

@@ -232,9 +232,13 @@ def _subject(rng: np.random.Generator, p: PerturberatorParameters) -> dict[str, 
         f"gait.{name}": _scaled(rng, getattr(g, name), 0.5, 2.0)
         for name in ("stance_sd_fraction", "force_sd_fraction", "cop_sd_fraction")
     }
+    stance = float(rng.uniform(0.72, 0.90))
+    longest = stance * (1 + 3 * variability["gait.stance_sd_fraction"])
+    duration = g.pre_contact_s + g.pre_contact_jitter_s + longest + 0.05  # covers every stance
     return variability | {
         "gait.body_mass_kg": float(rng.uniform(55.0, 100.0)),
-        "gait.stance_s": float(rng.uniform(0.72, 0.90)),
+        "gait.stance_s": stance,
+        "gait.trial_duration_s": max(g.trial_duration_s, float(np.ceil(duration * 20) / 20)),
         "gait.loading_s": float(rng.uniform(0.06, 0.14)),
         "gait.placement_sd_m": _scaled(rng, g.placement_sd_m, 0.5, 2.0),
         "gait.cop_knots_fraction": fractions,

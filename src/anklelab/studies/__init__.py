@@ -12,14 +12,20 @@ simulator or numba.
 
 from anklelab.studies.batch import BatchRun, run_batch
 from anklelab.studies.design import Design, design_trials
-from anklelab.studies.execute import LOCAL_CLUSTER, ResultStore, Task, attempt, run_tasks
-from anklelab.studies.rows import QUANTITIES, interval, timing_point_rows
+from anklelab.studies.execute import (
+    LOCAL_CLUSTER,
+    ResultStore,
+    Task,
+    attempt,
+    checkpoint_for,
+    run_tasks,
+)
+from anklelab.studies.rows import interval, timing_point_rows
 from anklelab.studies.spec import Cell, Study, TwinSettings, load_study, study_from_mapping
 from anklelab.studies.study import StudyRun, run_study
 
 __all__ = [
     "LOCAL_CLUSTER",
-    "QUANTITIES",
     "BatchRun",
     "Cell",
     "Design",
@@ -29,6 +35,7 @@ __all__ = [
     "Task",
     "TwinSettings",
     "attempt",
+    "checkpoint_for",
     "design_trials",
     "interval",
     "load_study",

@@ -6,8 +6,9 @@ directory holds, per session, ``sessions/NAME/results.json`` and ``results.csv``
 ``anklelab analyze`` writes them), and:
 
 - ``group.parquet`` / ``group.csv``: one row per session, timing point and quantity (subject,
-  session, its SHA-256, estimate, sd, interval and its kind, flags, warnings); a session that
-  could not be analysed is one row with ``status = "failed"`` and the reason as ``failure``;
+  session, its SHA-256, stiffness model, estimate, sd, 95 % interval and its kind,
+  ``poorly_determined``, warnings); a session that could not be analysed is one row with
+  ``status = "failed"`` and the reason as ``failure``;
 - ``pooled.parquet`` / ``pooled.csv``: per timing point and quantity, the mean over subjects of
   each subject's mean (over their sessions), the sd across subjects and a 95 % interval
   (Student's t; none with one subject);
@@ -34,7 +35,6 @@ from anklelab._version import __version__
 from anklelab.errors import ParameterError
 from anklelab.studies.execute import ResultStore, Task, run_tasks
 from anklelab.studies.rows import timing_point_rows
-from anklelab.studies.study import prepare_output
 from anklelab.studies.tables import write_table
 
 if TYPE_CHECKING:
@@ -47,7 +47,12 @@ __all__ = ["BatchRun", "analyse_session_file", "pooled_table", "run_batch", "ses
 
 @dataclass(frozen=True)
 class BatchRun:
-    """What :func:`run_batch` produced."""
+    """What :func:`run_batch` produced.
+
+    ``names``: the output name of each session path; ``failed``: the error of each session
+    (by name) that could not be analysed; ``inputs``: the SHA-256 of each analysed session
+    (by path).
+    """
 
     group: pd.DataFrame
     pooled: pd.DataFrame
@@ -55,6 +60,7 @@ class BatchRun:
     failed: dict[str, str]
     resumed: int
     ran: int
+    inputs: dict[str, str]
 
 
 def analyse_session_file(path: str, settings: WalkingSettings) -> dict[str, Any]:
@@ -109,18 +115,20 @@ def run_batch(
     out: Path,
     *,
     settings: WalkingSettings,
+    store: Path | None = None,
     scheduler: str | None = None,
     workers: int | None = None,
     retries: int = 0,
-    force: bool = False,
     figures: bool = True,
     progress: Callable[[int, int], None] | None = None,
 ) -> BatchRun:
     """Analyse every session in ``paths`` with ``settings`` and write the group tables to ``out``.
 
-    ``scheduler``, ``workers``, ``retries`` and ``progress`` are those of
-    :func:`anklelab.studies.execute.run_tasks`; ``force`` lets ``out`` be a directory holding
-    other files or another run (a run of the same batch is resumed).
+    ``store`` is where each analysed session's result is kept as it arrives (default
+    ``out/cells``; see :func:`anklelab.studies.run_study`): a session already there (the same
+    path, size, modification time and settings) is not analysed again. ``scheduler``,
+    ``workers``, ``retries`` and ``progress`` are those of
+    :func:`anklelab.studies.execute.run_tasks`.
     """
     paths = [Path(p) for p in paths]
     if not paths:
@@ -128,19 +136,10 @@ def run_batch(
     for path in paths:
         if not path.exists():
             raise ParameterError(f"{path}: session not found")
-        if path.is_dir() and out.resolve().is_relative_to(path.resolve()):
-            raise ParameterError(f"--out {out}: lies inside the session {path}; choose another")
     names = session_names(paths)
     config = settings.model_dump(mode="json")
     keys = [_key(path, config) for path in paths]
-    manifest = {
-        "anklelab_version": __version__,
-        "settings": config,
-        "sessions": [str(p) for p in paths],
-        "cells": keys,
-    }
-    prepare_output(out, manifest, force=force)
-    store = ResultStore(out / "cells")
+    results = ResultStore(out / "cells" if store is None else store)
     tasks = list(
         {
             k: Task(k, analyse_session_file, (str(p), settings))
@@ -148,24 +147,26 @@ def run_batch(
         }.values()
     )
     run = run_tasks(
-        tasks, store, scheduler=scheduler, workers=workers, retries=retries, progress=progress
+        tasks, results, scheduler=scheduler, workers=workers, retries=retries, progress=progress
     )
+    results.copy_into(list(dict.fromkeys(keys)), out / "cells")
     rows: list[dict[str, Any]] = []
-    failed = {}
-    for name, key in zip(names, keys, strict=True):
-        record = store.read(key)
+    failed, hashes = {}, {}
+    for path, name, key in zip(paths, names, keys, strict=True):
+        record = results.read(key)
         if not record["ok"]:
             failed[name] = record["error"]
             rows.append({"session": name, "status": "failed", "failure": record["error"]})
             continue
         document = record["document"]
+        hashes[str(path)] = document["session_sha256"]
         folder = out / "sessions" / name
         write_text_atomic(folder / "results.json", json.dumps(document, indent=2))
         write_table(_frame(record["table"]), folder / "results", parquet=False)
         identity = {
             "subject": record["subject"],
             "session": name,
-            "session_sha256": document.get("session_sha256"),
+            "session_sha256": document["session_sha256"],
         }
         for row in timing_point_rows(document, {}):
             kept = {k: v for k, v in row.items() if k not in _TRUTH}
@@ -179,7 +180,7 @@ def run_batch(
 
         group_figures(group[group["status"] == "ok"], pooled, out / "figures")
     named = dict(zip((str(p) for p in paths), names, strict=True))
-    return BatchRun(group, pooled, named, failed, int(run["resumed"]), int(run["ran"]))
+    return BatchRun(group, pooled, named, failed, int(run["resumed"]), int(run["ran"]), hashes)
 
 
 _TRUTH = ("truth", "error", "error_percent", "covered")
@@ -206,7 +207,7 @@ def pooled_table(group: pd.DataFrame) -> pd.DataFrame:
         out.append(
             {"direction": direction, "delay_ms": delay, "quantity": quantity, "n_subjects": n,
              "n_sessions": int(part["size"].sum()), "mean": mean, "sd_between_subjects": sd,
-             "low": mean - half, "high": mean + half}
+             "ci95_low": mean - half, "ci95_high": mean + half}
         )  # fmt: skip
     return pd.DataFrame(out)
 
@@ -218,9 +219,11 @@ def _frame(rows: list[dict[str, Any]]) -> pd.DataFrame:
 
 
 def _key(path: Path, settings: dict[str, Any]) -> str:
-    """Names a session's result: its path, size and modification time, and the settings."""
+    """Names a session's result: its path, size and modification time, the settings and the
+    anklelab version."""
     stat = path.stat()
     text = json.dumps(
-        [str(path.resolve()), stat.st_size, stat.st_mtime_ns, settings], sort_keys=True
+        [str(path.resolve()), stat.st_size, stat.st_mtime_ns, settings, __version__],
+        sort_keys=True,
     )
     return hashlib.sha256(text.encode()).hexdigest()[:16]

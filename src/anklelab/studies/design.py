@@ -36,7 +36,7 @@ from anklelab.errors import ParameterError
 from anklelab.studies.spec import study_from_mapping
 from anklelab.studies.study import StudyRun, run_study
 
-__all__ = ["Design", "design_trials"]
+__all__ = ["Design", "check_targets", "design_trials"]
 
 
 @dataclass(frozen=True)
@@ -96,7 +96,7 @@ def design_trials(
     n_calibration: int | None = None,
     scheduler: str | None = None,
     workers: int | None = None,
-    force: bool = False,
+    store: Path | None = None,
     figures: bool = True,
     progress: Callable[[int, int], None] | None = None,
 ) -> Design:
@@ -125,20 +125,10 @@ def design_trials(
         Analysis settings (WalkingSettings keys).
     n_calibration : int, optional
         Calibration trials of the pilot sessions (default: the parameter set's).
-    scheduler, workers, force, figures, progress
+    scheduler, workers, store, figures, progress
         As for :func:`anklelab.studies.run_study`.
     """
-    if interval_percent <= 0:
-        raise ParameterError(f"--interval: expected a half-width > 0 %, got {interval_percent}")
-    if change_percent <= 0:
-        raise ParameterError(f"--change: expected a change > 0 %, got {change_percent}")
-    if not 0 < power < 1:
-        raise ParameterError(f"--power: expected 0 < power < 1, got {power}")
-    counts = sorted({int(n) for n in pilot})
-    if len(counts) < 2 or counts[0] < 2:
-        raise ParameterError(f"--pilot: expected two or more counts >= 2, got {list(pilot)}")
-    if seeds < 1:
-        raise ParameterError(f"--seeds: expected >= 1, got {seeds}")
+    counts = check_targets(interval_percent, change_percent, power, pilot, seeds)
     document: dict[str, Any] = {
         "name": "design",
         "seeds": seeds,
@@ -151,7 +141,7 @@ def design_trials(
         document["params_file"] = str(Path(params_file).resolve())
     study = study_from_mapping(document, origin="design")
     run = run_study(
-        study, out, scheduler=scheduler, workers=workers, force=force, figures=False,
+        study, out, store=store, scheduler=scheduler, workers=workers, figures=False,
         progress=progress,
     )  # fmt: skip
     rows = run.results[
@@ -171,6 +161,24 @@ def design_trials(
 
     write_text_atomic(out / "design.json", json.dumps(design.to_dict(), indent=2))
     return design
+
+
+def check_targets(
+    interval_percent: float, change_percent: float, power: float, pilot: Sequence[int], seeds: int
+) -> list[int]:
+    """Check :func:`design_trials`'s targets before any work; the distinct pilot counts."""
+    if not (math.isfinite(interval_percent) and interval_percent > 0):
+        raise ParameterError(f"--interval: expected a half-width > 0 %, got {interval_percent:g}")
+    if not (math.isfinite(change_percent) and change_percent > 0):
+        raise ParameterError(f"--change: expected a change > 0 %, got {change_percent:g}")
+    if not 0 < power < 1:
+        raise ParameterError(f"--power: expected 0 < power < 1, got {power:g}")
+    counts = sorted({int(n) for n in pilot})
+    if len(counts) < 2 or counts[0] < 2:
+        raise ParameterError(f"--pilot: expected two or more counts >= 2, got {list(pilot)}")
+    if seeds < 1:
+        raise ParameterError(f"--seeds: expected >= 1, got {seeds}")
+    return counts
 
 
 def _ratio(params_file: Path | None) -> float:

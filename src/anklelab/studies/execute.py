@@ -11,9 +11,11 @@ Three ways to run, one code path for what happens to the results:
 
 Every task is a pure function of its arguments. :func:`attempt` runs it, retries it when it
 raises, and returns either its value or the error as text: a failed task is recorded, never
-dropped. Each finished task is written to ``DIR/cells/KEY.json`` at once (atomically), so a
+dropped. Each finished task is written to a :class:`ResultStore` at once (atomically), so a
 killed run loses only the tasks in flight: :func:`run_tasks` skips every task whose file
-exists. Worker processes run with one BLAS/OpenMP thread (as Dask's own nannies set them), so
+exists. A command keeps its store beside its output (:func:`checkpoint_for`), because the
+output directory itself is built under a temporary name and only appears when the run
+completes. Worker processes run with one BLAS/OpenMP thread (as Dask's own nannies set them), so
 numbers do not depend on how many tasks share a machine.
 """
 
@@ -21,6 +23,7 @@ from __future__ import annotations
 
 import json
 import os
+import shutil
 import time
 from collections.abc import Callable, Iterator, Sequence
 from contextlib import contextmanager
@@ -31,7 +34,15 @@ from typing import Any
 from anklelab._atomic import write_text_atomic
 from anklelab.errors import ParameterError
 
-__all__ = ["LOCAL_CLUSTER", "ResultStore", "Task", "attempt", "default_workers", "run_tasks"]
+__all__ = [
+    "LOCAL_CLUSTER",
+    "ResultStore",
+    "Task",
+    "attempt",
+    "checkpoint_for",
+    "default_workers",
+    "run_tasks",
+]
 
 LOCAL_CLUSTER = "local-cluster"
 _ONE_THREAD = {name: "1" for name in ("OMP_NUM_THREADS", "MKL_NUM_THREADS", "OPENBLAS_NUM_THREADS")}
@@ -65,6 +76,29 @@ class ResultStore:
     def write(self, key: str, record: dict[str, Any]) -> None:
         self.directory.mkdir(parents=True, exist_ok=True)
         write_text_atomic(self.path(key), json.dumps(record, allow_nan=True))
+
+    def copy_into(self, keys: Sequence[str], directory: Path) -> None:
+        """Copy the results of ``keys`` to ``directory`` (nothing when it is this store)."""
+        directory = Path(directory)
+        if directory.resolve() == self.directory.resolve():
+            return
+        directory.mkdir(parents=True, exist_ok=True)
+        for key in keys:
+            shutil.copyfile(self.path(key), directory / self.path(key).name)
+
+
+def checkpoint_for(out: Path) -> Path:
+    """Where a command writing ``out`` keeps finished tasks until its run completes.
+
+    A hidden directory beside the output, ``.NAME.anklelab-cells``: it outlives a run that is
+    stopped (even by ``kill -9``), so the next run into ``out`` resumes from it; the command
+    removes it once the output is in place.
+
+    >>> checkpoint_for(Path("/runs/misalignment")).as_posix()
+    '/runs/.misalignment.anklelab-cells'
+    """
+    out = Path(os.path.abspath(out))
+    return out.parent / f".{out.name}.anklelab-cells"
 
 
 def attempt(func: Callable[..., dict[str, Any]], args: Sequence[Any], retries: int) -> dict:

@@ -119,8 +119,8 @@ def group_figures(group: pd.DataFrame, pooled: pd.DataFrame, directory: Path) ->
     fig, ax = plt.subplots(figsize=(7, 4.5), constrained_layout=True)
     pooled = pooled[pooled["quantity"] == "stiffness_nm_per_rad"]
     for direction, part in pooled.groupby("direction"):
-        lo = part["mean"] - part["low"]
-        hi = part["high"] - part["mean"]
+        lo = part["mean"] - part["ci95_low"]
+        hi = part["ci95_high"] - part["mean"]
         ax.errorbar(part["delay_ms"], part["mean"], yerr=[lo.fillna(0), hi.fillna(0)],
                     marker="o", capsize=3, label=direction)  # fmt: skip
     ax.set(xlabel="timing point, ms after heel contact", ylabel="stiffness, N·m/rad")

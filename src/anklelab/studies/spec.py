@@ -32,7 +32,8 @@ point (common random numbers): two settings see the same gait, noise and trial o
 difference is not masked by seed-to-seed scatter.
 
 A cell is one (settings, seed): a pure description from which a worker simulates and analyses
-one session. Its key is a hash of its content, so a resumed study knows which cells it has.
+one session. Its key is a hash of its content (and of the anklelab version), so a resumed study
+knows which cells it has.
 """
 
 from __future__ import annotations
@@ -40,6 +41,7 @@ from __future__ import annotations
 import hashlib
 import itertools
 import json
+import math
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Literal
@@ -48,6 +50,7 @@ import numpy as np
 from pydantic import Field
 
 from anklelab._params import Parameters, did_you_mean, read_parameter_document
+from anklelab._version import __version__
 from anklelab.errors import ParameterError
 
 __all__ = [
@@ -118,8 +121,10 @@ class Cell:
 
     @property
     def key(self) -> str:
-        """A hash of what the cell computes (not of its position in the study)."""
+        """A hash of what the cell computes (not of its position in the study), and of the
+        anklelab version computing it."""
         content = {
+            "anklelab_version": __version__,
             "seed": self.seed,
             "twin": self.twin,
             "params": self.params,
@@ -219,6 +224,7 @@ def study_from_mapping(data: dict[str, Any], *, origin: str, root: Path | None =
     for key in data:
         if key not in allowed:
             raise ParameterError(f"{origin}: {key}: unknown key{did_you_mean(key, allowed)}")
+    _check_finite(data, origin)
     if data.get("format", FORMAT) != FORMAT:
         raise ParameterError(f"{origin}: format: expected {FORMAT!r}, got {data['format']!r}")
     if "grid" in data and "sample" in data:
@@ -233,7 +239,10 @@ def study_from_mapping(data: dict[str, Any], *, origin: str, root: Path | None =
         if not isinstance(table, dict):
             raise ParameterError(f"{origin}: [{prefix}]: expected a table")
         fixed |= {f"{prefix}.{key}": value for key, value in _flatten(table, prefix).items()}
-    grid = {k: v for k, v in data.get("grid", {}).items()}
+    for table in ("grid", "sample"):
+        if not isinstance(data.get(table, {}), dict):
+            raise ParameterError(f"{origin}: [{table}]: expected a table")
+    grid = dict(data.get("grid", {}))
     for key, values in grid.items():
         _check_key(key, origin, "grid")
         if not isinstance(values, list) or not values:
@@ -241,12 +250,29 @@ def study_from_mapping(data: dict[str, Any], *, origin: str, root: Path | None =
     sample = dict(data.get("sample", {}))
     if sample:
         _check_sample(sample, origin)
+    for key in fixed.keys() & {*grid, *sample}:
+        table = "grid" if key in grid else "sample"
+        raise ParameterError(
+            f"{origin}: {key}: given as a fixed setting and in [{table}]; keep one"
+        )
     base = _base(data.get("params_file"), origin, root)
     study = Study(name, seeds, fixed, grid, sample, base)
     for key in {*fixed, *study.varied}:
         _check_key(key, origin, "grid" if key in grid else "setting")
     _validate_cells(study, origin)
     return study
+
+
+def _check_finite(node: Any, origin: str, where: str = "") -> None:
+    """No NaN or infinity anywhere in a study (no setting means either)."""
+    if isinstance(node, float) and not math.isfinite(node):
+        raise ParameterError(f"{origin}: {where}: expected a finite number, got {node}")
+    if isinstance(node, dict):
+        for key, value in node.items():
+            _check_finite(value, origin, f"{where}.{key}" if where else str(key))
+    elif isinstance(node, list):
+        for i, value in enumerate(node):
+            _check_finite(value, origin, f"{where}[{i}]")
 
 
 def _flatten(table: dict[str, Any], prefix: str) -> dict[str, Any]:

@@ -6,8 +6,9 @@
   ran, so the file is the same, byte for byte, however and wherever it ran.
 - ``summary``: per point of the grid or sample (its varied settings), timing point and
   quantity, over the seeds: bias, sd, RMSE (also in % of the truth), the median, 95th
-  percentile and largest absolute error in %, the mean interval half-width in % and the
-  coverage (fraction of intervals holding the truth), with the interval's kind.
+  percentile and largest absolute error in %, the mean interval half-width in %, the
+  coverage (fraction of intervals holding the truth), with the interval's kind, and the
+  fraction of sessions whose estimate the analysis flagged as poorly determined.
   A failed cell is one row of ``results`` with ``status = "failed"`` and the error as
   ``failure``; the summary counts failed sessions per point (``n_failed``).
 - ``cells.csv``: the run log, one row per cell: status, error, tries, simulate and analyse
@@ -101,6 +102,7 @@ def summary_table(results: pd.DataFrame, varied: Sequence[str]) -> pd.DataFrame:
                 else np.nan,
                 "half_width_percent_mean": _mean(group["half_width_percent"].to_numpy(float)),
                 "coverage": float(covered.astype(bool).mean()) if len(covered) else np.nan,
+                "poorly_determined_fraction": _share(group["poorly_determined"]),
             }
         )
     return pd.DataFrame(out)
@@ -154,6 +156,12 @@ def _point_labels(table: pd.DataFrame, point: Sequence[str]) -> pd.Series:
     if not point or table.empty:
         return pd.Series([""] * len(table), index=table.index, dtype=object)
     return table[list(point)].map(repr).agg("|".join, axis=1)
+
+
+def _share(flags: pd.Series) -> float:
+    """Fraction of the set flags among the rows that carry one (NaN if none does)."""
+    known = flags.dropna()
+    return float(known.astype(bool).mean()) if len(known) else np.nan
 
 
 def _mean(values: np.ndarray) -> float:

@@ -9,7 +9,6 @@ import numpy as np
 from pydantic import Field, model_validator
 
 from anklelab._params import Parameters, load_parameters
-from anklelab.ident.impedance import StiffnessModel
 
 __all__ = ["WalkingSettings", "load_walking_settings"]
 
@@ -28,8 +27,9 @@ class WalkingSettings(Parameters):
     heel_contact_threshold_n, heel_contact_hold_ms
         Vertical force that marks heel contact (paper 000: 25 N) and how long it must hold.
     contact_cop_ms
-        The COP at heel contact (where the COP is zeroed) is the intercept of a line fitted to
-        the unfiltered COP over this span after contact.
+        The COP at heel contact (where the COP is zeroed) is read from a line fitted to the
+        unfiltered COP over this span from the contact sample, at the instant the force crosses
+        the threshold (short, so that a COP rolling fast after heel strike is followed).
     baseline_ms
         Unloaded span at the start of each walking file used to zero channels and motor angle.
     onset_min_amplitude_rad
@@ -58,25 +58,28 @@ class WalkingSettings(Parameters):
         the paper literally. Unset (``None``, the default), it follows the low-pass (see
         :meth:`offset_reference`): 80 ms at paper 000's 20 Hz, order 4.
     stiffness_model
-        ``"constant"`` (paper 000): one stiffness over the window. ``"linear"`` (expert
-        option): ``k + k₁ (t - t_c)``, ``t_c`` the θ²-weighted mean time of the window, so ``k``
-        is the θ²-weighted stiffness that ``cop_m`` refers to, and ``k₁`` is reported as
-        ``stiffness_slope_nm_per_rad_per_s`` (see :mod:`anklelab.ident.impedance`). Use it
-        when the stiffness changes markedly within the window (a human ankle in early and mid
-        stance): a constant fit then lets damping and inertia absorb the change, and
-        overestimates a rising stiffness. Measured on the twin's default sessions (10 seeds;
-        error = mean over seeds of estimate vs the truth reference, sd = bootstrap sd, both in
-        % of the reference; constant -> linear). Human ankle (stiffness rising 1.5 -> 6.5
-        N·m/rad/kg over 150-525 ms): 225 ms +8 -> -2, 350 ms +4 -> -2, 475 ms +1 -> +1, sd
-        1.3-3.0 -> 0.9-2.2; damping at 225/350 ms 0.2-0.3 -> 2.1-2.4 N·m·s/rad (true 2.25),
-        inertia 0.027-0.029 -> 0.015 kg·m² (true 0.020). At 100 ms the twin's stiffness is flat
-        until 150 ms and then rises, which neither model describes: +12/+21 -> -9/-4
-        (dorsi/plantar), sd 11 -> 6. Prosthetic foot (stiffness changing only through the
-        lever arm): errors within ±1.2 for both, sd 0.4-1.6 -> 0.7-1.6 (median ratio 1.38),
-        mean |error| 0.78 -> 0.96: where the stiffness hardly changes the extra parameter
-        costs precision, so the default stays ``"constant"``.
+        ``"auto"`` (default): per timing point, the constant or the linearly changing stiffness
+        ``k + k₁ (t - t_c)``, whichever estimates the θ²-weighted stiffness with the smaller
+        mean squared error (see :mod:`anklelab.pipelines.walking.impedance`). ``"constant"``:
+        paper 000's model. ``"linear"``: always the changing stiffness. How each does on the
+        randomised twin and the independent generator: docs/guide/walking-analysis.md.
+    covariate_adjustment, adjustment_span_ms, adjustment_guard_ms, adjustment_bins
+        Remove each trial's own gait variation, predicted from its raw signals over the
+        ``adjustment_span_ms`` before its onset (ending ``adjustment_guard_ms`` before it, in
+        ``adjustment_bins`` bins) by a regression learned on the unperturbed trials (see
+        :mod:`anklelab.pipelines.walking.adjustment`).
+    outlier_mads
+        A perturbed or unperturbed trial departing from its group's median by more than this
+        many robust sd at any sample is dropped with a reason (a glitch would dominate the
+        average).
+    interval_reps
+        Resamples behind each 95 % interval (``ci95``).
+    change_threshold
+        The stiffness is reported as changing within the window when the interval of its
+        change over the window (a fraction of it) lies wholly beyond this.
     bootstrap_reps, bootstrap_fraction, seed
-        Bootstrap: repetitions, fraction of the perturbed trials per repetition, seed.
+        Paper 000's bootstrap (its ``sd``): repetitions, fraction of the perturbed trials per
+        repetition; the seed of every random draw.
     """
 
     cutoff_hz: float = Field(20.0, gt=0)
@@ -84,7 +87,8 @@ class WalkingSettings(Parameters):
     derivative_window: int = Field(5, ge=3)
     heel_contact_threshold_n: float = Field(25.0, gt=0)
     heel_contact_hold_ms: float = Field(5.0, ge=0)
-    contact_cop_ms: float = Field(20.0, gt=0)
+    contact_cop_ms: float = Field(5.0, gt=0)
+    contact_cop_degree: int = Field(1, ge=0, le=5)
     baseline_ms: float = Field(50.0, gt=0)
     onset_min_amplitude_rad: float = Field(0.005, gt=0)
     onset_tolerance_ms: float = Field(50.0, gt=0)
@@ -98,8 +102,15 @@ class WalkingSettings(Parameters):
     window_ms: float = Field(100.0, gt=0)
     offset_reference_ms: float | None = Field(None, ge=0)
     sensitivity_windows_ms: tuple[float, ...] = (75.0, 125.0)
-    stiffness_model: StiffnessModel = "constant"
-    bootstrap_reps: int = Field(100, ge=1)
+    stiffness_model: Literal["auto", "constant", "linear"] = "auto"
+    covariate_adjustment: bool = True
+    adjustment_span_ms: float = Field(100.0, gt=0)
+    adjustment_guard_ms: float = Field(5.0, ge=0)
+    adjustment_bins: int = Field(5, ge=1, le=50)
+    outlier_mads: float = Field(25.0, gt=3)
+    interval_reps: int = Field(400, ge=20, le=20_000)
+    change_threshold: float = Field(0.2, gt=0)
+    bootstrap_reps: int = Field(100, ge=1, le=20_000)
     bootstrap_fraction: float = Field(0.6, gt=0, le=1)
     seed: int = Field(0, ge=0)
 

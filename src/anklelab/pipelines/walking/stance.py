@@ -17,7 +17,6 @@ from numpy.typing import NDArray
 from anklelab.data.session import Session, WalkingTrial
 from anklelab.errors import SessionFormatError
 from anklelab.forceplate import (
-    CHANNELS,
     SagittalLoad,
     ankle_torque,
     cop_from_moment,
@@ -38,8 +37,20 @@ from anklelab.signals import (
 
 __all__ = ["STANCE_CHANNELS", "drop_summary", "reason_kind", "samples", "stance_trials"]
 
-STANCE_CHANNELS = ("angle", "velocity", "acceleration", "torque", "dx", "grf_z", "motor_angle")
-"""Channels of the heel-contact-aligned stance trials (rad, rad/s, rad/s², N·m, m, N, rad)."""
+STANCE_CHANNELS = (
+    "angle",
+    "velocity",
+    "acceleration",
+    "torque",
+    "dx",
+    "grf_z",
+    "motor_angle",
+    "torque_raw",
+    "grf_z_raw",
+    "angle_raw",
+)
+"""Channels of the heel-contact-aligned stance trials (rad, rad/s, rad/s², N·m, m, N, rad; the
+``_raw`` ones unfiltered and uncorrected for the platform, N·m, N, rad)."""
 _MISMATCH = "onset differs from the manifest's delay_ms"
 
 
@@ -129,8 +140,9 @@ def stance_trials(
     fs = info.sample_rate_hz
     if not walking:
         raise SessionFormatError("walking/trials.csv: the session has no walking trials")
+    plate = info.force_plate
     raw, lengths = stack_recordings(
-        [w.recording for w in walking], ("motor_angle", "ankle_angle", *CHANNELS)
+        [w.recording for w in walking], ("motor_angle", "ankle_angle", *plate.channels)
     )
     n_base = max(1, round(settings.baseline_ms * fs / 1000.0))
     n_filter = lowpass_min_samples(fs, settings.cutoff_hz, order=settings.filter_order)
@@ -144,10 +156,14 @@ def stance_trials(
             "walking/trials.csv: no walking trial is long enough to analyse: "
             + drop_summary(_first_reasons(too_short, len(walking)), walking)
         )
-    raw -= raw[..., :n_base].mean(axis=-1, keepdims=True)  # the ankle angle is re-zeroed later
-    motor, ankle_raw, channels = raw[:, 0], raw[:, 1], raw[:, 2:]
-    sagittal = sagittal_matrix(info.force_plate)
-    load_raw = np.einsum("sc,nct->nst", sagittal, channels)  # grf_x, grf_z, grf_z * cop_x
+    # the plate's signals that are linear in the load (its channels, or for GRF/COP data the
+    # sagittal signals); they, the motor and the ankle angle are zeroed over the baseline (the
+    # ankle angle is re-zeroed later)
+    signals = np.concatenate([raw[:, :2], plate.load_signals(raw[:, 2:])], axis=1)
+    signals -= signals[..., :n_base].mean(axis=-1, keepdims=True)
+    motor, ankle_raw = signals[:, 0], signals[:, 1]
+    sagittal = sagittal_matrix(plate)
+    load_raw = np.einsum("sc,nct->nst", sagittal, signals[:, 2:])  # grf_x, grf_z, grf_z * cop_x
     contact = heel_contact(
         load_raw[:, 1],
         fs,
@@ -162,7 +178,15 @@ def stance_trials(
         lowpass(load_raw, **lp) - filters.predict(motor, combine=sagittal), 1, 0
     )
     cop_x = cop_from_moment(moment, grf_z)
-    cop0 = _cop_at_contact(load_raw[:, 1], load_raw[:, 2], event, fs, settings.contact_cop_ms)
+    cop0 = _cop_at_contact(
+        load_raw[:, 1],
+        load_raw[:, 2],
+        event,
+        settings.heel_contact_threshold_n,
+        fs,
+        settings.contact_cop_ms,
+        settings.contact_cop_degree,
+    )
     cop_defined = np.isfinite(cop0)
     cop_x[rows, event] = np.where(cop_defined, cop0, 0.0)  # ankle_torque zeroes the COP here
     torque, dx = ankle_torque(
@@ -210,9 +234,21 @@ def stance_trials(
     mislabelled = _mislabelled_conditions(walking, log, onset_ms, tolerance)
     usable = perturbed & np.array([not r for r in log])
     span = int(np.max(offset[usable], initial=0)) + samples(max(settings.windows_ms()), fs)
-    data = np.concatenate(
-        [kin, torque[:, None], dx[:, None], grf_z[:, None], motor[:, None]], axis=1
-    )
+    grf_x_raw, grf_z_raw, moment_raw = np.moveaxis(load_raw, 1, 0)
+    lever = np.where(cop_defined, cop0, 0.0)[:, None] + info.heel_to_ankle_m
+    channels_by_name = {
+        "angle": kin[:, 0],
+        "velocity": kin[:, 1],
+        "acceleration": kin[:, 2],
+        "torque": torque,
+        "dx": dx,
+        "grf_z": grf_z,
+        "motor_angle": motor,
+        "torque_raw": moment_raw - lever * grf_z_raw + grf_x_raw * info.ankle_height_m,
+        "grf_z_raw": grf_z_raw,
+        "angle_raw": ankle_raw - ankle[rows, event][:, None],
+    }
+    data = np.stack([channels_by_name[name] for name in STANCE_CHANNELS], axis=1)
     time0 = np.array([w.recording.time_s[0] for w in walking])
     metadata = {
         "condition": np.array([condition(w) for w in walking]),
@@ -245,25 +281,40 @@ def _cop_at_contact(
     grf_z: NDArray[np.float64],
     moment: NDArray[np.float64],
     event: NDArray[np.int64],
+    threshold_n: float,
     fs: float,
     span_ms: float,
+    degree: int,
 ) -> NDArray[np.float64]:
-    """COP at heel contact: a line fitted to the raw COP over the first ``span_ms`` of contact.
+    """COP at heel contact: the raw COP's local polynomial at the instant the force crosses.
 
-    The low-pass would smear the force's sudden rise at heel strike over the following samples
-    and move the COP at contact forward; the raw COP (``moment / grf_z``) is unbiased but noisy
-    at small loads, so the line is weighted by ``grf_z**2`` (the COP's noise falls as 1/Fz),
-    which also makes every term a product of the raw signals (no division).
+    The crossing is found to a fraction of a sample (linear interpolation of the vertical force
+    between the last sample below ``threshold_n`` and the first above). A polynomial of
+    ``degree`` in time is fitted to the raw COP (``moment / grf_z``) over the first ``span_ms``
+    from the crossing sample, weighted by ``grf_z**2``, and evaluated at the crossing. The
+    weight follows the COP's error, which falls as 1/Fz: channel noise, and the plate's own
+    inertial and ringing loads when the foot's strike moves the compliant hinge, weigh most
+    where the load is small. The low-pass is not used: it would smear the force's rise over the
+    following samples. With the weight every term is a product of raw signals (no division).
     """
-    n = max(2, round(span_ms * fs / 1000.0))
-    index = np.minimum(event[:, None] + np.arange(n), grf_z.shape[-1] - 1)
-    fz = np.take_along_axis(grf_z, index, axis=-1)
-    weight, weighted_cop = fz**2, fz * np.take_along_axis(moment, index, axis=-1)
-    t = np.arange(n, dtype=float)
-    s0, s1, s2 = weight.sum(-1), weight @ t, weight @ t**2
-    c0, c1 = weighted_cop.sum(-1), weighted_cop @ t
+    n = max(degree + 1, round(span_ms * fs / 1000.0))
+    last = grf_z.shape[-1] - 1
+    index = np.minimum(event[:, None] + np.arange(n), last)
+    before = np.take_along_axis(grf_z, np.maximum(event - 1, 0)[:, None], axis=-1)[:, 0]
+    at = np.take_along_axis(grf_z, index[:, :1], axis=-1)[:, 0]
     with np.errstate(invalid="ignore", divide="ignore"):
-        return (s2 * c0 - s1 * c1) / (s0 * s2 - s1**2)
+        crossing = np.clip((threshold_n - at) / (at - before), -1.0, 0.0)  # samples from event
+    fz = np.take_along_axis(grf_z, index, axis=-1)
+    t = (np.arange(n) - np.nan_to_num(crossing)[:, None]) / n  # 0 at the crossing
+    powers = t[..., None] ** np.arange(degree + 1)  # (n_trials, n, degree + 1)
+    weighted = powers * fz[..., None]
+    gram = np.einsum("tnp,tnq->tpq", weighted, weighted)
+    rhs = np.einsum("tnp,tn->tp", weighted, np.take_along_axis(moment, index, axis=-1))
+    with np.errstate(invalid="ignore", divide="ignore"):
+        singular = np.abs(np.linalg.det(gram)) < np.finfo(float).tiny
+        gram[singular] = np.eye(degree + 1)
+        coef = np.linalg.solve(gram, rhs[..., None])[..., 0]
+    return np.where(singular, np.nan, coef[:, 0])
 
 
 def samples(ms: float, fs: float) -> int:
