@@ -41,6 +41,7 @@ class World:
     native: Path  # the same session as a native file
     ident: Path  # a capstan identification directory
     results: Path  # a results directory `report` accepts
+    study: Path  # a tiny study file (`study` would run it)
     filters: dict = field(repr=False)  # a valid platform-filter document
     scratch: Path  # where each example makes its files
 
@@ -75,11 +76,13 @@ def world(tmp_path_factory):
     )
     filters = fit_platform_filters(session, WalkingSettings())[0].to_dict()
     (root / "scratch").mkdir()
+    (root / "study.toml").write_text(STUDY)
     return World(
         save_session(session, root / "s", format="dir"),
         save_session(session, root / "s.h5"),
         write_ident_directory(simulate_ident(seed=1), root / "ident"),
         results,
+        root / "study.toml",
         filters,
         root / "scratch",
     )
@@ -209,6 +212,51 @@ def filter_file(w: World, value: object, folder: Path) -> Path:
     return folder / "f.json"
 
 
+STUDY = """name = "tiny"
+seeds = [0, 1]
+[twin]
+trials_per_point = 3
+foot = "prosthetic"
+[analysis]
+bootstrap_reps = 10
+[grid]
+"analysis.window_ms" = [75.0, 100.0]
+"""
+STUDY_TOP = ["seeds", "format", "params_file", "twin", "analysis", "grid", "sample", "params"]
+STUDY_INNER = ["twin.trials_per_point", "twin.foot", "twin.noise_scale", "twin.randomised",
+               "analysis.bootstrap_reps", "analysis.window_ms"]  # fmt: skip
+
+
+def study_document(args: tuple[str, str]) -> bytes:
+    """The tiny study with one key (top level, in a table, or a grid value) given a bad value,
+    or an unknown key added."""
+    key, value = args
+    if "." in key:
+        table, name = key.split(".")
+        lines = [line for line in STUDY.splitlines() if not line.startswith(f"{name} =")]
+        at = lines.index(f"[{table}]") + 1
+        return "\n".join([*lines[:at], f"{name} = {value}", *lines[at:]]).encode()
+    if key == "grid-value":
+        return STUDY.replace("[75.0, 100.0]", f"[75.0, {value}]").encode()
+    kept, skip = [], False
+    for line in STUDY.splitlines():  # drop the key's line or table
+        if line.startswith("["):
+            skip = line == f"[{key}]"
+        if not skip and not line.startswith(f"{key} ="):
+            kept.append(line)
+    return f"{key} = {value}\n{chr(10).join(kept)}".encode()
+
+
+STUDY_FILES = files(
+    st.tuples(st.sampled_from([*STUDY_TOP, *STUDY_INNER, "grid-value"]), TOML_VALUES).map(
+        study_document
+    ),
+    st.from_regex(r"[a-z_]{1,12}", fullmatch=True)
+    .filter(lambda k: k not in (*STUDY_TOP, "name"))
+    .map(lambda k: f"{k} = 1\n{STUDY}".encode()),
+)
+
+
 # --- slots: one corrupted part of one command -----------------------------------------------
 
 
@@ -233,6 +281,18 @@ def filters_base(w: World, folder: Path) -> list[str]:
 
 def friction_base(w: World, folder: Path) -> list[str]:
     return ["identify", "friction", w.ident, "--out", folder / "o", "--no-figures"]
+
+
+def study_base(w: World, folder: Path) -> list[str]:
+    return ["study", w.study, "--out", folder / "o", "--no-figures"]
+
+
+def design_base(w: World, folder: Path) -> list[str]:
+    return ["design", "--out", folder / "o", "--pilot", "2,3", "--seeds", "1"]
+
+
+def batch_base(w: World, folder: Path) -> list[str]:
+    return ["batch", w.native, "--out", folder / "o", "--no-figures"]
 
 
 def simulate_base(w: World, folder: Path) -> list[str]:
@@ -426,6 +486,33 @@ SLOTS = [
          file_slot("p.toml", lambda w, p, f: ["platform", "bode", "--params", p])),
     Slot("platform bode --plot", st.sampled_from(["x.xyz", "x", "dir", "exists", "parent-file"]),
          lambda w, how, f: bode_plot(how, f)),
+    # study / design / batch (they run on Dask: every slot must fail before a worker starts)
+    Slot("study STUDY", STUDY_FILES,
+         file_slot("st.toml", lambda w, p, f: ["study", p, "--out", f / "o"])),
+    Slot("study --workers", ints_below(1) | NOT_INTEGERS, option([], "--workers", study_base)),
+    Slot("study --retries", ints_below(0) | NOT_INTEGERS, option([], "--retries", study_base)),
+    out_slot("study --out", lambda w, o: ["study", w.study, "--out", o], lambda w: w.study),
+    Slot("design --interval", below(0) | NOT_NUMBERS | st.just("0"),
+         option([], "--interval", design_base)),
+    Slot("design --change", below(0) | NOT_NUMBERS | st.just("0"),
+         option([], "--change", design_base)),
+    Slot("design --power", below(0) | above(1) | NOT_NUMBERS | st.sampled_from(["0", "1"]),
+         option([], "--power", design_base)),
+    Slot("design --pilot", st.sampled_from(["", "a", "5", "1,2", "10,10", "-3,4", "2;3", "2,,3"]),
+         option([], "--pilot", design_base)),
+    Slot("design --seeds", ints_below(1) | NOT_INTEGERS, option([], "--seeds", design_base)),
+    Slot("design --foot", not_one_of("prosthetic", "human"), option([], "--foot", design_base)),
+    Slot("design --params", PERTURBERATOR,
+         file_slot("p.toml", lambda w, p, f: [*design_base(w, f), "--params", p])),
+    Slot("design --settings", SETTINGS,
+         file_slot("st.toml", lambda w, p, f: [*design_base(w, f), "--settings", p])),
+    out_slot("design --out", lambda w, o: ["design", "--out", o, "--pilot", "2,3"]),
+    Slot("batch SESSIONS", st.sampled_from([Bad("missing"), Bad("fifo"), Bad("link-out")]),
+         file_slot("s", lambda w, p, f: ["batch", w.native, p, "--out", f / "o"])),
+    Slot("batch --settings", SETTINGS,
+         file_slot("st.toml", lambda w, p, f: [*batch_base(w, f), "--settings", p])),
+    Slot("batch --workers", ints_below(1) | NOT_INTEGERS, option([], "--workers", batch_base)),
+    out_slot("batch --out", lambda w, o: ["batch", w.session, "--out", o], session_of),
     # demo
     Slot("demo --seed", ints_below(0) | NOT_INTEGERS,
          lambda w, v, f: ["demo", "--quick", "--out", f / "d", "--seed", v]),

@@ -33,6 +33,7 @@ RANK = {
     "signals": 5,
     "ident": 6,
     "pipelines": 7,
+    "studies": 7.5,  # many sessions through the twin and the pipelines, on Dask; above report
     "report": 8,
     "demo": 9,  # an application of every layer above (the twins, analyses, report rendering)
     "commands": 10,

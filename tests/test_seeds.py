@@ -7,6 +7,7 @@ Generator passed to several calls continues its stream.
 
 from __future__ import annotations
 
+import dataclasses
 import importlib
 import inspect
 import pkgutil
@@ -24,6 +25,11 @@ from anklelab.sim.sensors import force_channels, goniometer_reading, load_cell_r
 RANDOM_PARAMETERS = {"seed", "rng", "random_state", "generator"}
 
 
+def _record(cls: type) -> bool:
+    """A frozen dataclass: its ``__init__`` only stores its fields (its methods are checked)."""
+    return dataclasses.is_dataclass(cls) and cls.__dataclass_params__.frozen
+
+
 def _public_callables():
     for info in pkgutil.walk_packages(anklelab.__path__, "anklelab."):
         if info.name.startswith("anklelab.commands"):
@@ -34,10 +40,14 @@ def _public_callables():
             if inspect.isfunction(obj):
                 yield f"{info.name}.{name}", obj
             elif inspect.isclass(obj) and not issubclass(obj, Parameters):
-                # settings models hold a serialisable int seed (written to results.json)
+                # settings models, and the fields of frozen records (a study's cell), hold a
+                # serialisable int seed (written to results.json, hashed into a cell's key)
+                init = not _record(obj)
                 for attr, member in vars(obj).items():
                     func = getattr(member, "__func__", member)
-                    if inspect.isfunction(func) and (attr == "__init__" or attr[0] != "_"):
+                    if inspect.isfunction(func) and (
+                        (attr == "__init__" and init) or attr[0] != "_"
+                    ):
                         yield f"{info.name}.{name}.{attr}", func
 
 

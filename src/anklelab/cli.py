@@ -15,8 +15,10 @@ import typer
 from anklelab import __version__
 from anklelab.commands import (
     analyze,
+    batch,
     capstan,
     demo,
+    design,
     forceplate,
     identify,
     imports,
@@ -24,6 +26,7 @@ from anklelab.commands import (
     report,
     session,
     simulate,
+    study,
     tree,
 )
 from anklelab.errors import AnklelabError
@@ -46,6 +49,9 @@ app.add_typer(simulate.app, name="simulate")
 app.add_typer(capstan.app, name="capstan")
 app.command("demo")(demo.demo)
 app.command("report")(report.report)
+app.command("study")(study.study)
+app.command("design")(design.design)
+app.command("batch")(batch.batch)
 
 
 def _version(value: bool) -> None:

@@ -147,6 +147,7 @@ def perturberator(
     from contextlib import ExitStack
 
     from anklelab.commands._files import array_bytes, check_space, output_directory, output_file
+    from anklelab.commands._kernels import prepare_kernel
     from anklelab.commands._progress_bars import recording_progress
     from anklelab.data import save_session
     from anklelab.experiments.perturberator import simulate_perturberator
@@ -169,6 +170,7 @@ def perturberator(
         else:
             target = stack.enter_context(output_file(out, force=force, inputs=inputs))
         task = stack.enter_context(recording_progress())
+        prepare_kernel(parameters, task)
         session = simulate_perturberator(
             parameters,
             seed=seed,

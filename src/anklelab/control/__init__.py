@@ -1,4 +1,11 @@
-"""Controllers, trajectories, observers and safety limits (DESIGN.md section 2, ``control``)."""
+"""Controllers, trajectories, observers and safety limits (DESIGN.md section 2, ``control``).
+
+The servo-loop measurement tools (:mod:`anklelab.control.servo`) load on first use: they need
+``scipy.signal``, which would otherwise cost every simulation a second of imports.
+"""
+
+from importlib import import_module
+from typing import Any
 
 from anklelab.control.haptics import (
     TerrainProfile,
@@ -26,17 +33,6 @@ from anklelab.control.safety import (
     SafetyMonitor,
     new_safety_state,
     safety_update,
-)
-from anklelab.control.servo import (
-    CascadeGains,
-    LoopMargins,
-    bandwidth_hz,
-    fit_second_order,
-    loop_margins,
-    periodic_frf,
-    phase_crossing_hz,
-    prbs,
-    second_order_response,
 )
 from anklelab.control.trigger import (
     onset_updates,
@@ -80,3 +76,12 @@ __all__ = [
     "second_order_response",
     "trigger_updates",
 ]
+
+
+def __getattr__(name: str) -> Any:
+    """The servo-loop tools (the names of :mod:`anklelab.control.servo`), loaded on first use."""
+    if not name.startswith("_"):  # introspection (``__wrapped__``...) never loads SciPy
+        servo = import_module("anklelab.control.servo")  # not `from . import`: that recurses
+        if name in servo.__all__:
+            return getattr(servo, name)
+    raise AttributeError(f"module 'anklelab.control' has no attribute {name!r}")

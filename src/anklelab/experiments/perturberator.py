@@ -170,6 +170,7 @@ class _Setup:
     art: Artefacts
     plan: StepDirectionPlan
     substeps: int
+    threads: int | None = None
 
     @property
     def fs(self) -> float:
@@ -195,6 +196,7 @@ def simulate_perturberator(
     time_courses: bool = True,
     progress: Progress | None = None,
     fault: TrialFault | None = None,
+    threads: int | None = None,
 ) -> Session:
     """Simulate a whole Perturberator session (calibration, walking, bench) with ground truth.
 
@@ -227,6 +229,9 @@ def simulate_perturberator(
         Called as ``progress(done, total)`` with trial counts as the simulation advances.
     fault : TrialFault, optional
         A sensor fault to inject into one walking trial.
+    threads : int, optional
+        Threads that simulate trials side by side (default: the CPUs available, see
+        :func:`anklelab.sim.drivetrain.default_threads`); the session does not depend on it.
 
     Returns
     -------
@@ -244,7 +249,7 @@ def simulate_perturberator(
     model = foot_model(foot, params)
     bench = model.kind == "prosthetic" if bench is None else bench
     art = Artefacts.coerce(artefacts)
-    setup = _Setup(params, art, StepDirectionPlan.from_params(params), substeps)
+    setup = _Setup(params, art, StepDirectionPlan.from_params(params), substeps, threads)
     rng_cal, rng_walk, rng_bench = np.random.default_rng(seed).spawn(3)
     walk = params.walking
     per_point = walk.trials_per_point if trials_per_point is None else trials_per_point
@@ -322,7 +327,11 @@ def _calibration(
         )
         planned[i] = move.sequence(times, onsets, signs)
     run = simulate_platform(
-        setup.params, setup.reference(planned, n), artefacts=setup.art, substeps=setup.substeps
+        setup.params,
+        setup.reference(planned, n),
+        artefacts=setup.art,
+        substeps=setup.substeps,
+        threads=setup.threads,
     )
     _check_faults(run, "calibration", 0)
     assert run.wrench is not None
@@ -456,7 +465,7 @@ def _run_walking(
             p, setup.reference(planned, n), load=sub, artefacts=setup.art,
             substeps=setup.substeps, fork=fork, encoder_fault_s=lost,
             encoder_fault=_ENCODER_FAULTS.get(fault.kind if fault else "", EncoderFault.NAN),
-            encoder_jump_rad=fault.value if fault else 0.0,
+            encoder_jump_rad=fault.value if fault else 0.0, threads=setup.threads,
         )  # fmt: skip
         _check_faults(run, "walking", start)
         assert run.wrench is not None and run.snapshot is not None
@@ -470,6 +479,7 @@ def _run_walking(
                 load=FootLoad(sub.channels[moved], load.fs, sub.scalars[moved]),
                 artefacts=setup.art, plate=False, substeps=setup.substeps,
                 resume=(fork[moved], run.snapshot[moved]), stop=fork[moved] + width * per_sample,
+                threads=setup.threads,
             )  # fmt: skip
             for m, i in enumerate(moved):
                 span = slice(first[i] - 2 * MARGIN, first[i] - 2 * MARGIN + width)

@@ -159,7 +159,7 @@ def _plate_wrench(s, d, ta, lx, lz, gv, pc, fp, inertia, c, sn, w):
     w[5] = cx * ly - cy * lx
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def run_batch(
     pc, fp, g, gait_fs, ref, inj, flags, sos_v, sos_h, sos_aa, plate_every, rec_every,
     span, resume, fork, enc_fault, enc_jump, mech, wrench, loop, snap, fault,

@@ -44,6 +44,9 @@ guide, sections "Controlled Stop" and "Dynamic Braking"; AKD fault card):
 
 from __future__ import annotations
 
+import itertools
+import os
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 from enum import IntEnum
 
@@ -62,7 +65,9 @@ __all__ = [
     "EncoderFault",
     "FootLoad",
     "PlatformRun",
+    "default_threads",
     "dynamic_brake_nms_per_rad",
+    "kernel_needs_compiling",
     "platform_constants",
     "simulate_platform",
     "stopping_distance",
@@ -218,6 +223,7 @@ def simulate_platform(
     encoder_fault_s: NDArray[np.float64] | None = None,
     encoder_fault: EncoderFault = EncoderFault.NAN,
     encoder_jump_rad: float = 0.0,
+    threads: int | None = None,
 ) -> PlatformRun:
     """Run the servo-controlled hinge on a batch of position references.
 
@@ -256,6 +262,9 @@ def simulate_platform(
         How it fails: reads NaN, freezes (no new frames) or jumps by ``encoder_jump_rad``.
     encoder_jump_rad : float
         Size of a jump, rad.
+    threads : int, optional
+        Trials are independent: split the batch across this many threads (default
+        :func:`default_threads`). The result does not depend on it, bit for bit.
 
     Returns
     -------
@@ -322,12 +331,29 @@ def simulate_platform(
     mech = np.zeros((n_trials, K.N_MECH, n_rec))
     wrench = np.zeros((n_trials, K.N_WRENCH, n_rec if plate else 0))
     loop = np.zeros((n_trials, 3, n_ticks if record_loop else 0))
-    K.run_batch(
-        pc, np.ascontiguousarray(fp, dtype=float), np.ascontiguousarray(g, dtype=float),
-        float(gait_fs), ref, np.ascontiguousarray(inj), flags, sos_v, sos_h, sos_aa,
-        2, rec_every, span, start_state, forks, enc_fault, enc_jump, mech, wrench, loop, snap,
-        fault,
+    per_trial = (
+        np.ascontiguousarray(fp, dtype=float), np.ascontiguousarray(g, dtype=float), ref,
+        np.ascontiguousarray(inj), span, start_state, forks, enc_fault, enc_jump, mech, wrench,
+        loop, snap, fault,
     )  # fmt: skip
+
+    def run(rows: slice) -> None:
+        fp_, g_, ref_, inj_, span_, start_, fork_, enc_, jump_, mech_, wr_, loop_, snap_, fault_ = (
+            a[rows] for a in per_trial
+        )
+        K.run_batch(
+            pc, fp_, g_, float(gait_fs), ref_, inj_, flags, sos_v, sos_h, sos_aa, 2, rec_every,
+            span_, start_, fork_, enc_, jump_, mech_, wr_, loop_, snap_, fault_,
+        )  # fmt: skip
+
+    n_threads = max(1, min(default_threads() if threads is None else threads, n_trials))
+    edges = np.linspace(0, n_trials, n_threads + 1).round().astype(int)
+    chunks = [slice(a, b) for a, b in itertools.pairwise(edges)]
+    if n_threads == 1:
+        run(chunks[0])
+    else:  # the kernel releases the GIL
+        with ThreadPoolExecutor(n_threads) as pool:
+            list(pool.map(run, chunks))
     return PlatformRun(
         fs=fs_rec,
         motor_angle=mech[:, K.O_THM],
@@ -343,6 +369,32 @@ def simulate_platform(
         fault=fault[:, 0],
         fault_s=np.where(fault[:, 0] > 0, fault[:, 1] / sv.velocity_loop_rate_hz, np.nan),
     )
+
+
+def default_threads() -> int:
+    """Threads a simulation uses by default: the CPUs this process may run on.
+
+    ``ANKLELAB_SIM_THREADS`` overrides it (a study's workers set 1: they are the parallelism).
+    """
+    value = os.environ.get("ANKLELAB_SIM_THREADS")
+    if value:
+        return max(1, int(value))
+    return len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count() or 1
+
+
+def kernel_needs_compiling() -> bool:
+    """Whether the next simulation will compile the twin's kernel (neither in this process nor
+    in numba's on-disk cache for these sources).
+
+    Reads numba's cache index (an internal of numba: if it changes, this answers False and the
+    compilation simply happens unannounced).
+    """
+    if K.run_batch.signatures:
+        return False
+    try:
+        return not K.run_batch._cache._cache_file._load_index()  # type: ignore[attr-defined]
+    except Exception:  # numba internals: never fail a simulation over a notice
+        return False
 
 
 def stopping_distance(

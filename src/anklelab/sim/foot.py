@@ -43,11 +43,11 @@ from typing import Literal
 
 import numpy as np
 from numpy.typing import NDArray
-from scipy.interpolate import PchipInterpolator
 
 from anklelab.errors import ParameterError
 from anklelab.platforms.perturberator import PerturberatorParameters
 from anklelab.sim import _kernels as K
+from anklelab.sim._pchip import pchip
 from anklelab.sim.drivetrain import FootLoad
 from anklelab.sim.gait import GaitTrials, StanceSignals, cop_progression_at
 
@@ -109,9 +109,8 @@ class FootModel:
         if self.kind == "prosthetic":
             return np.where(np.isnan(fraction), 0.0, torque / stiffness)
         h = self.params.human
-        curve = PchipInterpolator(h.angle_knots_fraction, h.angle_knots_rad)
         u = np.where(np.isnan(fraction), 0.0, fraction)
-        return np.asarray(curve(np.clip(u, 0, 1)))
+        return pchip(h.angle_knots_fraction, h.angle_knots_rad, np.clip(u, 0, 1))
 
     def describe(self) -> dict[str, object]:
         """The foot's kind and parameters (for the session's truth tree)."""

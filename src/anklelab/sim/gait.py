@@ -22,10 +22,10 @@ from dataclasses import dataclass, fields
 
 import numpy as np
 from numpy.typing import NDArray
-from scipy.interpolate import PchipInterpolator
 
 from anklelab.errors import ParameterError
 from anklelab.platforms.perturberator import GaitParameters
+from anklelab.sim._pchip import pchip
 
 __all__ = [
     "GaitTrials",
@@ -171,8 +171,8 @@ def stance_signals(
 
 def _progression(u: NDArray, scale: NDArray, params: GaitParameters) -> NDArray:
     """COP progression from the initial-contact point at stance fractions ``u``, m."""
-    cop = PchipInterpolator(params.cop_knots_fraction, params.cop_knots_m, extrapolate=False)
-    return np.nan_to_num(cop(np.clip(u, 0, 1))) * scale
+    cop = pchip(params.cop_knots_fraction, params.cop_knots_m, np.clip(u, 0, 1))
+    return np.nan_to_num(cop) * scale
 
 
 def cop_progression_at(

@@ -1,0 +1,240 @@
+"""Experiment design on the twin: how many perturbed trials per timing point?
+
+A study preset. Pilot sessions of the foot the user describes are simulated at a few trial
+counts (several seeds each, the unperturbed trials scaled along, as in paper 000's 400 for 100
+per point) and analysed as lab data. For every condition (direction and timing point) the
+stiffness interval the analysis reports (its ``ci95``, else ``mean ± 1.96 sd``: see
+:mod:`anklelab.studies.rows`) is fitted by ``half-width = c / sqrt(m)``, ``m`` the condition's
+perturbed trials (random averages shrink so). Each trial of a timing point is dorsiflexing or
+plantarflexing at random, so a condition gets a binomial share of the ``n`` trials per timing
+point; the design holds for the share a condition gets in 9 sessions of 10 (the binomial's 10th
+percentile ``m10(n)``, about ``n/2 - 0.64 sqrt(n)``): ``half-width(n) = c / sqrt(m10(n))``.
+Then:
+
+- **interval**: the smallest ``n`` whose predicted half-width is within ``±X %`` of the
+  stiffness in *every* condition;
+- **power**: to detect a ``Y %`` stiffness change between two timing points (a two-sided test at
+  5 %, each estimate with the standard error ``half-width / 1.96`` of the widest condition),
+  ``power(n) = Φ(Y / (√2 se(n)) − 1.96) + Φ(−Y / (√2 se(n)) − 1.96)``; the smallest ``n``
+  reaching the target power.
+
+The recommendation is the larger of the two. The pilot's actual errors against the twin's truth
+are reported next to the intervals: an interval is only worth its width if it covers the truth.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from anklelab.errors import ParameterError
+from anklelab.studies.spec import study_from_mapping
+from anklelab.studies.study import StudyRun, run_study
+
+__all__ = ["Design", "check_targets", "design_trials"]
+
+
+@dataclass(frozen=True)
+class Design:
+    """The answer of :func:`design_trials`.
+
+    Attributes
+    ----------
+    recommended : int
+        Perturbed trials per timing point (the larger of the next two).
+    for_interval, for_power : int
+        Enough for the interval target in every condition; enough for the power target.
+    curve : dict
+        ``trials_per_point``, ``half_width_percent`` (widest condition), ``power``; the targets;
+        ``pilot``: per pilot count, the mean reported half-width of the widest condition and the
+        RMS error against the truth, in %.
+    conditions : list of dict
+        Per condition: ``direction``, ``delay_ms``, the fitted ``c_percent`` and the ``n`` it
+        needs.
+    interval_kind : str
+        Which interval the analysis reported (``ci95`` or ``mean±1.96sd``).
+    study : StudyRun
+        The pilot study.
+    """
+
+    recommended: int
+    for_interval: int
+    for_power: int
+    curve: dict[str, Any]
+    conditions: list[dict[str, Any]]
+    interval_kind: str
+    study: StudyRun
+
+    def to_dict(self) -> dict[str, Any]:
+        """``design.json``."""
+        return {
+            "recommended_trials_per_point": self.recommended,
+            "for_interval": self.for_interval,
+            "for_power": self.for_power,
+            "interval_kind": self.interval_kind,
+            "conditions": self.conditions,
+            "curve": self.curve,
+        }
+
+
+def design_trials(
+    out: Path,
+    *,
+    foot: str = "prosthetic",
+    params_file: Path | None = None,
+    interval_percent: float = 3.0,
+    change_percent: float = 10.0,
+    power: float = 0.8,
+    pilot: Sequence[int] = (10, 20, 40),
+    seeds: int = 2,
+    analysis: dict[str, Any] | None = None,
+    n_calibration: int | None = None,
+    scheduler: str | None = None,
+    workers: int | None = None,
+    store: Path | None = None,
+    figures: bool = True,
+    progress: Callable[[int, int], None] | None = None,
+) -> Design:
+    """Run the pilot study into ``out`` and answer how many trials per timing point.
+
+    Parameters
+    ----------
+    out : Path
+        Output directory (the pilot study's tables, ``design.json``, ``figures/design.png``).
+    foot : {"prosthetic", "human"}
+        What walks on the plate.
+    params_file : Path, optional
+        A Perturberator parameter file describing the foot (its ``bench`` law and
+        ``prosthetic`` table, or ``human`` table), the platform and the protocol.
+    interval_percent : float
+        Target half-width of the stiffness interval, % of the stiffness (X in ±X %).
+    change_percent : float
+        Stiffness change between timing points to detect, % (Y).
+    power : float
+        Target power for that change (0 < power < 1).
+    pilot : sequence of int
+        Trials per timing point of the pilot sessions (at least two distinct counts).
+    seeds : int
+        Pilot sessions per count.
+    analysis : dict, optional
+        Analysis settings (WalkingSettings keys).
+    n_calibration : int, optional
+        Calibration trials of the pilot sessions (default: the parameter set's).
+    scheduler, workers, store, figures, progress
+        As for :func:`anklelab.studies.run_study`.
+    """
+    counts = check_targets(interval_percent, change_percent, power, pilot, seeds)
+    document: dict[str, Any] = {
+        "name": "design",
+        "seeds": seeds,
+        "twin": {"foot": foot, "bench": False, "unperturbed_per_point": _ratio(params_file)}
+        | ({"n_calibration": n_calibration} if n_calibration else {}),
+        "analysis": dict(analysis or {}),
+        "grid": {"twin.trials_per_point": counts},
+    }
+    if params_file is not None:
+        document["params_file"] = str(Path(params_file).resolve())
+    study = study_from_mapping(document, origin="design")
+    run = run_study(
+        study, out, store=store, scheduler=scheduler, workers=workers, figures=False,
+        progress=progress,
+    )  # fmt: skip
+    rows = run.results[
+        (run.results["status"] == "ok") & (run.results["quantity"] == "stiffness_nm_per_rad")
+    ]
+    if rows.empty:
+        failures = "; ".join(sorted(set(run.failed["error"]))) or "no stiffness estimates"
+        raise ParameterError(f"design: every pilot session failed ({failures})")
+    design = _answer(rows, run, interval_percent, change_percent, power)
+    if figures:
+        from anklelab.studies.figures import design_figure
+
+        design_figure(design.curve, out / "figures" / "design.png")
+    import json
+
+    from anklelab._atomic import write_text_atomic
+
+    write_text_atomic(out / "design.json", json.dumps(design.to_dict(), indent=2))
+    return design
+
+
+def check_targets(
+    interval_percent: float, change_percent: float, power: float, pilot: Sequence[int], seeds: int
+) -> list[int]:
+    """Check :func:`design_trials`'s targets before any work; the distinct pilot counts."""
+    if not (math.isfinite(interval_percent) and interval_percent > 0):
+        raise ParameterError(f"--interval: expected a half-width > 0 %, got {interval_percent:g}")
+    if not (math.isfinite(change_percent) and change_percent > 0):
+        raise ParameterError(f"--change: expected a change > 0 %, got {change_percent:g}")
+    if not 0 < power < 1:
+        raise ParameterError(f"--power: expected 0 < power < 1, got {power:g}")
+    counts = sorted({int(n) for n in pilot})
+    if len(counts) < 2 or counts[0] < 2:
+        raise ParameterError(f"--pilot: expected two or more counts >= 2, got {list(pilot)}")
+    if seeds < 1:
+        raise ParameterError(f"--seeds: expected >= 1, got {seeds}")
+    return counts
+
+
+def _ratio(params_file: Path | None) -> float:
+    """Unperturbed trials per perturbed trial of one timing point in the parameter set."""
+    from anklelab.platforms import load_platform
+
+    walking = load_platform("perturberator", params_file).walking
+    return walking.n_unperturbed / walking.trials_per_point
+
+
+def _answer(rows: Any, run: StudyRun, target: float, change: float, power: float) -> Design:
+    from scipy.stats import binom, norm
+
+    n = rows["twin.trials_per_point"].to_numpy(float)
+    # fit per condition against its own trial count (each trial of a timing point is dorsi or
+    # plantar at random: a condition gets about half); a bootstrap of fewer than 3 trials has
+    # no spread to measure
+    usable = rows[(rows["n_perturbed"] >= 3) & (rows["half_width_percent"] > 0)]
+    conditions = []
+    for (direction, delay), group in usable.groupby(["direction", "delay_ms"], sort=True):
+        h = group["half_width_percent"].to_numpy(float)
+        x = 1.0 / np.sqrt(group["n_perturbed"].to_numpy(float))
+        c = float(np.sum(h * x) / np.sum(x**2))  # least squares h = c / sqrt(n)
+        conditions.append({"direction": direction, "delay_ms": float(delay), "c_percent": c})
+    if not conditions:
+        raise ParameterError("design: the pilot sessions are too small; give larger --pilot counts")
+    grid = np.arange(2, 20001)
+    share = np.maximum(binom.ppf(0.1, grid, 0.5), 1.0)  # a condition's trials, 9 sessions in 10
+    for cond in conditions:
+        cond["trials_needed"] = int(grid[np.argmax(cond["c_percent"] / np.sqrt(share) <= target)])
+    widest = max(cond["c_percent"] for cond in conditions)
+    for_interval = max(cond["trials_needed"] for cond in conditions)
+    half = widest / np.sqrt(share)
+    shift = change / (math.sqrt(2) * half / 1.96)
+    power_curve = norm.cdf(shift - 1.96) + norm.cdf(-shift - 1.96)
+    for_power = int(grid[np.argmax(power_curve >= power)])
+    recommended = max(for_interval, for_power)
+    shown = grid <= max(2 * recommended, int(n.max()) + 1)
+    pilot = rows.groupby("twin.trials_per_point")
+    widest_seen = rows.groupby(["twin.trials_per_point", "seed"])["half_width_percent"].max()
+    curve = {
+        "trials_per_point": grid[shown].tolist(),
+        "half_width_percent": half[shown].tolist(),
+        "power": power_curve[shown].tolist(),
+        "target_percent": target,
+        "change_percent": change,
+        "target_power": power,
+        "recommended": recommended,
+        "pilot": {
+            "trials_per_point": [int(k) for k in pilot.groups],
+            "half_width_percent": widest_seen.groupby(level=0).mean().tolist(),
+            "rms_error_percent": pilot["error_percent"]
+            .apply(lambda e: float(np.sqrt(np.nanmean(e.to_numpy(float) ** 2))))
+            .tolist(),
+            "sessions": pilot["seed"].nunique().tolist(),
+        },
+    }
+    kind = "/".join(sorted(set(rows["interval_kind"])))
+    return Design(recommended, for_interval, for_power, curve, conditions, kind, run)

@@ -1,0 +1,273 @@
+"""Run many independent tasks on Dask, keeping each result on disk as it arrives.
+
+Three ways to run, one code path for what happens to the results:
+
+- by default, Dask's local scheduler over a pool of worker processes on this machine (one per
+  CPU unless told otherwise);
+- ``local-cluster``: a ``distributed.LocalCluster`` of worker processes talking TCP on the
+  loopback interface (what a real cluster does, on one machine);
+- an address (``tcp://host:8786``): the scheduler of a running Dask cluster, whose workers must
+  have anklelab installed (and, for ``batch``, see the session files at the same paths).
+
+Every task is a pure function of its arguments. :func:`attempt` runs it, retries it when it
+raises, and returns either its value or the error as text: a failed task is recorded, never
+dropped. Each finished task is written to a :class:`ResultStore` at once (atomically), so a
+killed run loses only the tasks in flight: :func:`run_tasks` skips every task whose file
+exists. A command keeps its store beside its output (:func:`checkpoint_for`), because the
+output directory itself is built under a temporary name and only appears when the run
+completes. Worker processes run with one BLAS/OpenMP thread (as Dask's own nannies set them), so
+numbers do not depend on how many tasks share a machine.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import shutil
+import time
+from collections.abc import Callable, Iterator, Sequence
+from contextlib import contextmanager
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from anklelab._atomic import write_text_atomic
+from anklelab.errors import ParameterError
+
+__all__ = [
+    "LOCAL_CLUSTER",
+    "ResultStore",
+    "Task",
+    "attempt",
+    "checkpoint_for",
+    "default_workers",
+    "run_tasks",
+]
+
+LOCAL_CLUSTER = "local-cluster"
+_ONE_THREAD = {name: "1" for name in ("OMP_NUM_THREADS", "MKL_NUM_THREADS", "OPENBLAS_NUM_THREADS")}
+
+
+@dataclass(frozen=True)
+class Task:
+    """``func(*args)`` under a stable ``key`` (the name of its result file)."""
+
+    key: str
+    func: Callable[..., dict[str, Any]]
+    args: tuple[Any, ...]
+
+
+class ResultStore:
+    """One JSON file per finished task under ``directory``."""
+
+    def __init__(self, directory: Path) -> None:
+        self.directory = Path(directory)
+
+    def path(self, key: str) -> Path:
+        return self.directory / f"{key}.json"
+
+    def has(self, key: str) -> bool:
+        return self.path(key).is_file()
+
+    def read(self, key: str) -> dict[str, Any]:
+        result: dict[str, Any] = json.loads(self.path(key).read_text(encoding="utf-8"))
+        return result
+
+    def write(self, key: str, record: dict[str, Any]) -> None:
+        self.directory.mkdir(parents=True, exist_ok=True)
+        write_text_atomic(self.path(key), json.dumps(record, allow_nan=True))
+
+    def copy_into(self, keys: Sequence[str], directory: Path) -> None:
+        """Copy the results of ``keys`` to ``directory`` (nothing when it is this store)."""
+        directory = Path(directory)
+        if directory.resolve() == self.directory.resolve():
+            return
+        directory.mkdir(parents=True, exist_ok=True)
+        for key in keys:
+            shutil.copyfile(self.path(key), directory / self.path(key).name)
+
+
+def checkpoint_for(out: Path) -> Path:
+    """Where a command writing ``out`` keeps finished tasks until its run completes.
+
+    A hidden directory beside the output, ``.NAME.anklelab-cells``: it outlives a run that is
+    stopped (even by ``kill -9``), so the next run into ``out`` resumes from it; the command
+    removes it once the output is in place.
+
+    >>> checkpoint_for(Path("/runs/misalignment")).as_posix()
+    '/runs/.misalignment.anklelab-cells'
+    """
+    out = Path(os.path.abspath(out))
+    return out.parent / f".{out.name}.anklelab-cells"
+
+
+def attempt(func: Callable[..., dict[str, Any]], args: Sequence[Any], retries: int) -> dict:
+    """``func(*args)`` tried up to ``1 + retries`` times.
+
+    Returns ``{"ok": True, "attempts": n, **value}`` or, when every try raised,
+    ``{"ok": False, "attempts": n, "error": "ExceptionType: message"}``.
+    """
+    error = ""
+    for n in range(1, retries + 2):
+        try:
+            return {"ok": True, "attempts": n} | func(*args)
+        except Exception as exc:  # recorded with the task, never dropped
+            error = " ".join(f"{type(exc).__name__}: {exc}".split())
+    return {"ok": False, "attempts": retries + 1, "error": error}
+
+
+def default_workers() -> int:
+    """Worker processes by default: the CPUs this process may use."""
+    if hasattr(os, "sched_getaffinity"):
+        return len(os.sched_getaffinity(0))
+    return os.cpu_count() or 1
+
+
+def run_tasks(
+    tasks: Sequence[Task],
+    store: ResultStore,
+    *,
+    scheduler: str | None = None,
+    workers: int | None = None,
+    retries: int = 1,
+    progress: Callable[[int, int], None] | None = None,
+) -> dict[str, float]:
+    """Run every task whose result is not in ``store`` yet; write each result as it finishes.
+
+    Parameters
+    ----------
+    tasks : sequence of Task
+    store : ResultStore
+    scheduler : str, optional
+        None: Dask's local scheduler over worker processes; ``"local-cluster"``: a
+        ``LocalCluster`` over TCP on the loopback interface; else the address of a running
+        Dask scheduler.
+    workers : int, optional
+        Worker processes for the local scheduler and the local cluster (default: the CPUs).
+    retries : int
+        Extra tries of a task that raises (and, on a cluster, of one whose worker died).
+    progress : callable, optional
+        ``progress(done, total)`` as tasks finish (resumed ones count as done).
+
+    Returns
+    -------
+    dict
+        ``{"resumed": tasks found done, "ran": tasks run, "wall_s": seconds}``.
+    """
+    if retries < 0:
+        raise ParameterError(f"retries: expected >= 0, got {retries}")
+    if workers is not None and workers < 1:
+        raise ParameterError(f"--workers: expected >= 1, got {workers}")
+    todo = [task for task in tasks if not store.has(task.key)]
+    done = len(tasks) - len(todo)
+    report = progress or (lambda _done, _total: None)
+    report(done, len(tasks))
+    start = time.perf_counter()
+    if todo:
+        counter = [done]
+
+        def finished(key: str, record: dict[str, Any]) -> None:
+            store.write(key, record)
+            counter[0] += 1
+            report(counter[0], len(tasks))
+
+        n_workers = default_workers() if workers is None else workers
+        if scheduler is None:
+            _run_local(todo, n_workers, retries, finished)
+        else:
+            _run_distributed(todo, scheduler, n_workers, retries, finished)
+    return {"resumed": done, "ran": len(todo), "wall_s": time.perf_counter() - start}
+
+
+def _run_local(
+    tasks: list[Task], workers: int, retries: int, finished: Callable[[str, dict], None]
+) -> None:
+    """Dask's local scheduler on a pool of spawned worker processes."""
+    import multiprocessing
+    from concurrent.futures import ProcessPoolExecutor
+
+    import dask.multiprocessing
+
+    graph = {task.key: (attempt, task.func, task.args, retries) for task in tasks}
+
+    def written(key: str, result: dict, dsk: Any, state: Any, worker: Any) -> None:
+        finished(key, result)
+
+    # dask's local callbacks: (start, start_state, pretask, posttask, finish)
+    callbacks = [(None, None, None, written, None)]
+
+    with (
+        _environment(_ONE_THREAD),
+        ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context("spawn")) as pool,
+    ):
+        # chunksize 1: each result comes back (and is written) as soon as it is done
+        dask.multiprocessing.get(graph, list(graph), pool=pool, callbacks=callbacks, chunksize=1)
+
+
+def _run_distributed(
+    tasks: list[Task],
+    scheduler: str,
+    workers: int,
+    retries: int,
+    finished: Callable[[str, dict], None],
+) -> None:
+    """A ``distributed`` cluster: a local one over TCP, or the one at ``scheduler``."""
+    import logging
+
+    from distributed import Client, LocalCluster, as_completed
+
+    logging.getLogger("distributed").setLevel(logging.ERROR)
+    with _client(scheduler, workers, Client, LocalCluster) as client:
+        futures = client.map(
+            attempt,
+            [task.func for task in tasks],
+            [task.args for task in tasks],
+            [retries] * len(tasks),
+            key=[task.key for task in tasks],
+            retries=retries,
+            pure=False,
+        )
+        for future in as_completed(futures):
+            if future.status == "finished":
+                record = future.result()
+            else:  # the worker died (every retry): the task's error, not the study's
+                exc = future.exception()
+                error = " ".join(f"{type(exc).__name__}: {exc}".split())
+                record = {"ok": False, "attempts": retries + 1, "error": error}
+            finished(future.key, record)
+            future.release()
+
+
+@contextmanager
+def _client(scheduler: str, workers: int, client_type: Any, cluster_type: Any) -> Iterator[Any]:
+    if scheduler == LOCAL_CLUSTER:
+        with cluster_type(
+            n_workers=workers, threads_per_worker=1, processes=True, protocol="tcp",
+            host="127.0.0.1", dashboard_address=None,
+        ) as cluster, client_type(cluster) as client:  # fmt: skip
+            yield client
+        return
+    try:
+        client = client_type(scheduler, timeout="10s")
+    except (OSError, TimeoutError, ValueError) as exc:
+        raise ParameterError(
+            f"--scheduler {scheduler}: no Dask scheduler answers there ({exc}); give "
+            f"'{LOCAL_CLUSTER}', or the address of a running scheduler (tcp://HOST:8786)"
+        ) from None
+    with client:
+        yield client
+
+
+@contextmanager
+def _environment(values: dict[str, str]) -> Iterator[None]:
+    """Set environment variables for the block (spawned workers inherit them)."""
+    saved = {name: os.environ.get(name) for name in values}
+    os.environ.update(values)
+    try:
+        yield
+    finally:
+        for name, value in saved.items():
+            if value is None:
+                os.environ.pop(name, None)
+            else:
+                os.environ[name] = value

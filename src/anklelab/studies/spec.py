@@ -1,0 +1,397 @@
+"""Study files: what a study varies, and the cells it expands into.
+
+A study file is TOML. Its fixed settings are three tables, and what varies is either a
+``[grid]`` (every combination) or a seeded ``[sample]`` (random draws); every setting is named
+by a dotted key with one of three prefixes:
+
+- ``twin.KEY``: how each session is simulated (:class:`TwinSettings`: foot, trials per timing
+  point, unperturbed and calibration trials, a noise scale, a randomised-twin family);
+- ``params.SECTION.KEY``: any Perturberator parameter (``params.geometry.misalignment_anterior_m``,
+  ``params.walking.amplitude_rad``, ``params.prosthetic.shell_compliance_rad_per_nm``...);
+- ``analysis.KEY``: any walking-analysis setting (``analysis.window_ms``, ``analysis.cutoff_hz``,
+  ``analysis.bootstrap_reps``...).
+
+::
+
+    name = "misalignment"
+    seeds = 4                      # seeds 0..3, or a list: [3, 7, 11]
+
+    [twin]
+    trials_per_point = 40
+
+    [analysis]
+    bootstrap_reps = 50
+
+    [grid]
+    "params.geometry.misalignment_anterior_m" = [0.0, 0.008, 0.016]
+
+A ``[sample]`` draws ``n`` points with its own ``seed``; each key gives ``{uniform = [lo, hi]}``,
+``{loguniform = [lo, hi]}``, ``{integers = [lo, hi]}`` (both ends included) or
+``{choice = [...]}``. Every point (grid or sample) runs once per seed. The same seeds serve every
+point (common random numbers): two settings see the same gait, noise and trial order, so their
+difference is not masked by seed-to-seed scatter.
+
+A cell is one (settings, seed): a pure description from which a worker simulates and analyses
+one session. Its key is a hash of its content (and of the anklelab version), so a resumed study
+knows which cells it has.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import itertools
+import json
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Literal
+
+import numpy as np
+from pydantic import Field
+
+from anklelab._params import Parameters, did_you_mean, read_parameter_document
+from anklelab._version import __version__
+from anklelab.errors import ParameterError
+
+__all__ = [
+    "PREFIXES",
+    "Cell",
+    "Study",
+    "TwinSettings",
+    "load_study",
+    "study_from_mapping",
+]
+
+PREFIXES = ("twin", "params", "analysis")
+FORMAT = "anklelab-study/1"
+
+
+class TwinSettings(Parameters):
+    """How each session of a study is simulated (``twin.*`` keys).
+
+    Attributes
+    ----------
+    foot : {"prosthetic", "human"}
+        What walks on the plate (ignored when ``randomised`` draws the foot).
+    trials_per_point, n_unperturbed, n_calibration
+        Protocol size; unset means the parameter set's (or, randomised, the draw's).
+    unperturbed_per_point
+        Instead of ``n_unperturbed``: that many unperturbed trials per perturbed trial of one
+        timing point (paper 000: 400 for 100, so 4), so that the protocol scales as a whole when
+        ``trials_per_point`` varies.
+    noise_scale
+        Factor on every noise source: force-plate noise and drift, goniometer precision,
+        load-cell noise.
+    randomised : {"none", "prosthetic", "human", "random"}
+        Draw each session's platform, subject and foot from the randomised twin's family
+        (:func:`anklelab.experiments.draw_twin`); ``params.*`` keys then apply on top of the draw.
+    bench
+        Simulate the prosthesis's bench tests (unset: with the prosthetic foot only).
+    artefacts
+        Measurement artefacts on (paper 000's lab) or off (ideal sensors and gait).
+    """
+
+    foot: Literal["prosthetic", "human"] = "prosthetic"
+    trials_per_point: int | None = Field(None, ge=1)
+    n_unperturbed: int | None = Field(None, ge=1)
+    unperturbed_per_point: float | None = Field(None, gt=0)
+    n_calibration: int | None = Field(None, ge=1)
+    noise_scale: float = Field(1.0, ge=0)
+    randomised: Literal["none", "prosthetic", "human", "random"] = "none"
+    bench: bool | None = None
+    artefacts: bool = True
+
+
+@dataclass(frozen=True)
+class Cell:
+    """One session of a study: settings by prefix, and the seed.
+
+    ``twin``, ``params`` and ``analysis`` map keys (without their prefix) to values;
+    ``variables`` holds the grid or sample values of this cell by their full dotted key;
+    ``base`` is a whole parameter set (from ``params_file``) or None for the shipped one.
+    """
+
+    index: int
+    seed: int
+    twin: dict[str, Any]
+    params: dict[str, Any]
+    analysis: dict[str, Any]
+    variables: dict[str, Any]
+    base: dict[str, Any] | None = field(default=None, repr=False)
+
+    @property
+    def key(self) -> str:
+        """A hash of what the cell computes (not of its position in the study), and of the
+        anklelab version computing it."""
+        content = {
+            "anklelab_version": __version__,
+            "seed": self.seed,
+            "twin": self.twin,
+            "params": self.params,
+            "analysis": self.analysis,
+            "base": self.base,
+        }
+        text = json.dumps(content, sort_keys=True, default=_jsonable)
+        return hashlib.sha256(text.encode()).hexdigest()[:16]
+
+
+@dataclass(frozen=True)
+class Study:
+    """A parsed study file.
+
+    Attributes
+    ----------
+    name : str
+    seeds : tuple of int
+    fixed : dict
+        Fixed settings by full dotted key (``"twin.trials_per_point"``).
+    grid : dict
+        Grid values by full dotted key (empty for a sample study).
+    sample : dict
+        ``{"n": ..., "seed": ..., key: distribution}`` (empty for a grid study).
+    base : dict or None
+        Parameter set from ``params_file`` (already validated).
+    """
+
+    name: str
+    seeds: tuple[int, ...]
+    fixed: dict[str, Any]
+    grid: dict[str, list[Any]]
+    sample: dict[str, Any]
+    base: dict[str, Any] | None = None
+
+    @property
+    def varied(self) -> list[str]:
+        """The keys that change from cell to cell (besides the seed), in file order."""
+        return list(self.grid) or [k for k in self.sample if k not in ("n", "seed")]
+
+    def points(self) -> list[dict[str, Any]]:
+        """The grid's combinations or the sample's draws, each by full dotted key."""
+        if self.grid:
+            keys = list(self.grid)
+            return [dict(zip(keys, v, strict=True)) for v in itertools.product(*self.grid.values())]
+        if not self.sample:
+            return [{}]
+        rng = np.random.default_rng(self.sample["seed"])
+        keys = self.varied
+        return [
+            {key: _draw(rng, self.sample[key]) for key in keys} for _ in range(self.sample["n"])
+        ]
+
+    def cells(self) -> list[Cell]:
+        """Every (point, seed), seeds innermost."""
+        out: list[Cell] = []
+        for point in self.points():
+            settings = self.fixed | point
+            split: dict[str, dict[str, Any]] = {prefix: {} for prefix in PREFIXES}
+            for dotted, value in settings.items():
+                prefix, key = dotted.split(".", 1)
+                split[prefix][key] = value
+            for seed in self.seeds:
+                out.append(
+                    Cell(len(out), seed, split["twin"], split["params"], split["analysis"],
+                         point, self.base)
+                )  # fmt: skip
+        return out
+
+    def describe(self) -> dict[str, Any]:
+        """The study as a JSON-able document (recorded in the output)."""
+        return {
+            "format": FORMAT,
+            "name": self.name,
+            "seeds": list(self.seeds),
+            "fixed": self.fixed,
+            "grid": self.grid,
+            "sample": self.sample,
+            "params_file": self.base is not None,
+        }
+
+
+def load_study(path: str | Path) -> Study:
+    """Read and validate a study file (see the module docstring); errors name the file and key.
+
+    Every cell's settings are validated here, before anything runs: a typo in the last grid
+    value fails at once rather than hours into the study.
+    """
+    path = Path(path)
+    data = read_parameter_document(path, "toml", what="study file")
+    return study_from_mapping(data, origin=str(path), root=path.parent)
+
+
+def study_from_mapping(data: dict[str, Any], *, origin: str, root: Path | None = None) -> Study:
+    """Validate a study document (the parsed TOML); ``root`` resolves ``params_file``."""
+    allowed = {"format", "name", "seeds", "params_file", *PREFIXES, "grid", "sample"}
+    for key in data:
+        if key not in allowed:
+            raise ParameterError(f"{origin}: {key}: unknown key{did_you_mean(key, allowed)}")
+    _check_finite(data, origin)
+    if data.get("format", FORMAT) != FORMAT:
+        raise ParameterError(f"{origin}: format: expected {FORMAT!r}, got {data['format']!r}")
+    if "grid" in data and "sample" in data:
+        raise ParameterError(f"{origin}: give either [grid] or [sample], not both")
+    name = data.get("name", Path(origin).stem)
+    if not isinstance(name, str) or not name:
+        raise ParameterError(f"{origin}: name: expected a non-empty string, got {name!r}")
+    seeds = _seeds(data.get("seeds", 1), origin)
+    fixed: dict[str, Any] = {}
+    for prefix in PREFIXES:
+        table = data.get(prefix, {})
+        if not isinstance(table, dict):
+            raise ParameterError(f"{origin}: [{prefix}]: expected a table")
+        fixed |= {f"{prefix}.{key}": value for key, value in _flatten(table, prefix).items()}
+    for table in ("grid", "sample"):
+        if not isinstance(data.get(table, {}), dict):
+            raise ParameterError(f"{origin}: [{table}]: expected a table")
+    grid = dict(data.get("grid", {}))
+    for key, values in grid.items():
+        _check_key(key, origin, "grid")
+        if not isinstance(values, list) or not values:
+            raise ParameterError(f"{origin}: grid.{key}: expected a non-empty list of values")
+    sample = dict(data.get("sample", {}))
+    if sample:
+        _check_sample(sample, origin)
+    for key in fixed.keys() & {*grid, *sample}:
+        table = "grid" if key in grid else "sample"
+        raise ParameterError(
+            f"{origin}: {key}: given as a fixed setting and in [{table}]; keep one"
+        )
+    base = _base(data.get("params_file"), origin, root)
+    study = Study(name, seeds, fixed, grid, sample, base)
+    for key in {*fixed, *study.varied}:
+        _check_key(key, origin, "grid" if key in grid else "setting")
+    _validate_cells(study, origin)
+    return study
+
+
+def _check_finite(node: Any, origin: str, where: str = "") -> None:
+    """No NaN or infinity anywhere in a study (no setting means either)."""
+    if isinstance(node, float) and not math.isfinite(node):
+        raise ParameterError(f"{origin}: {where}: expected a finite number, got {node}")
+    if isinstance(node, dict):
+        for key, value in node.items():
+            _check_finite(value, origin, f"{where}.{key}" if where else str(key))
+    elif isinstance(node, list):
+        for i, value in enumerate(node):
+            _check_finite(value, origin, f"{where}[{i}]")
+
+
+def _flatten(table: dict[str, Any], prefix: str) -> dict[str, Any]:
+    """``params`` nests sections (``[params.geometry]``); the other tables are flat."""
+    if prefix != "params":
+        return table
+    out: dict[str, Any] = {}
+    for key, value in table.items():
+        if isinstance(value, dict):
+            out |= {f"{key}.{k}": v for k, v in _flatten(value, prefix).items()}
+        else:
+            out[key] = value
+    return out
+
+
+def _seeds(value: Any, origin: str) -> tuple[int, ...]:
+    if isinstance(value, int) and not isinstance(value, bool) and value >= 1:
+        return tuple(range(value))
+    if (
+        isinstance(value, list)
+        and value
+        and all(isinstance(s, int) and not isinstance(s, bool) and s >= 0 for s in value)
+        and len(set(value)) == len(value)
+    ):
+        return tuple(value)
+    raise ParameterError(
+        f"{origin}: seeds: expected a count >= 1 or a list of distinct seeds >= 0, got {value!r}"
+    )
+
+
+def _check_key(key: str, origin: str, where: str) -> None:
+    prefix = key.split(".", 1)[0]
+    if "." not in key or prefix not in PREFIXES:
+        raise ParameterError(
+            f"{origin}: {where} key {key!r}: expected twin.KEY, params.SECTION.KEY or analysis.KEY"
+        )
+
+
+_DISTRIBUTIONS = ("uniform", "loguniform", "integers", "choice")
+
+
+def _check_sample(sample: dict[str, Any], origin: str) -> None:
+    n, seed = sample.get("n"), sample.get("seed")
+    if not isinstance(n, int) or isinstance(n, bool) or n < 1:
+        raise ParameterError(f"{origin}: sample.n: expected a number of points >= 1, got {n!r}")
+    if not isinstance(seed, int) or isinstance(seed, bool) or seed < 0:
+        raise ParameterError(f"{origin}: sample.seed: expected an integer >= 0, got {seed!r}")
+    for key, spec in sample.items():
+        if key in ("n", "seed"):
+            continue
+        _check_key(key, origin, "sample")
+        ok = isinstance(spec, dict) and len(spec) == 1 and next(iter(spec)) in _DISTRIBUTIONS
+        kind, args = next(iter(spec.items())) if ok else (None, None)
+        if ok and kind != "choice":
+            ok = (
+                isinstance(args, list)
+                and len(args) == 2
+                and all(isinstance(a, int | float) and not isinstance(a, bool) for a in args)
+                and args[0] <= args[1]
+                and (kind != "loguniform" or args[0] > 0)
+            )
+        elif ok:
+            ok = isinstance(args, list) and bool(args)
+        if not ok:
+            raise ParameterError(
+                f"{origin}: sample.{key}: expected one of {{uniform = [lo, hi]}}, "
+                f"{{loguniform = [lo, hi]}} (lo > 0), {{integers = [lo, hi]}} or "
+                f"{{choice = [...]}}, got {spec!r}"
+            )
+
+
+def _draw(rng: np.random.Generator, spec: dict[str, Any]) -> Any:
+    kind, args = next(iter(spec.items()))
+    if kind == "uniform":
+        return float(rng.uniform(*args))
+    if kind == "loguniform":
+        return float(np.exp(rng.uniform(np.log(args[0]), np.log(args[1]))))
+    if kind == "integers":
+        return int(rng.integers(int(args[0]), int(args[1]) + 1))
+    value = args[int(rng.integers(len(args)))]
+    return value
+
+
+def _base(path: Any, origin: str, root: Path | None) -> dict[str, Any] | None:
+    if path is None:
+        return None
+    if not isinstance(path, str):
+        raise ParameterError(f"{origin}: params_file: expected a path, got {path!r}")
+    from anklelab.platforms import load_platform
+
+    full = (root or Path.cwd()) / path
+    return load_platform("perturberator", full).model_dump()
+
+
+def _validate_cells(study: Study, origin: str) -> None:
+    """Build every distinct point's twin settings, parameters and analysis settings once."""
+    from anklelab.pipelines.walking import WalkingSettings
+    from anklelab.platforms import load_platform
+    from anklelab.platforms.perturberator import PerturberatorParameters
+
+    base = (
+        load_platform("perturberator")
+        if study.base is None
+        else PerturberatorParameters.model_validate(study.base)
+    )
+    for cell in study.cells()[:: len(study.seeds)]:
+        where = f"{origin}: " + (
+            ", ".join(f"{k} = {v!r}" for k, v in cell.variables.items()) or "fixed settings"
+        )
+        try:
+            TwinSettings().replace(cell.twin)
+            base.replace(cell.params)
+            WalkingSettings().replace(cell.analysis)
+        except ParameterError as exc:
+            reason = " ".join(str(exc).replace("replace(): invalid parameters:", "").split())
+            raise ParameterError(f"{where}: {reason}") from None
+
+
+def _jsonable(value: Any) -> Any:
+    if isinstance(value, tuple):
+        return list(value)
+    raise TypeError(f"not JSON: {value!r}")

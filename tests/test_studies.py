@@ -1,0 +1,300 @@
+"""Studies on Dask: study files, identical tables however they run, resume after a kill,
+failed cells reported, the design preset checked by simulation, and batches of sessions."""
+
+from __future__ import annotations
+
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from anklelab._runs import RunManifest
+from anklelab.errors import ParameterError
+from anklelab.studies import (
+    attempt,
+    checkpoint_for,
+    design_trials,
+    run_study,
+    study_from_mapping,
+)
+from anklelab.studies.tables import results_table, summary_table
+
+ROOT = Path(__file__).resolve().parents[1]
+TINY = {
+    "name": "tiny",
+    "seeds": [0, 1],
+    "twin": {"trials_per_point": 3, "n_unperturbed": 6, "n_calibration": 2, "bench": False},
+    "analysis": {"bootstrap_reps": 10},
+    "grid": {"params.geometry.misalignment_anterior_m": [0.0, 0.016]},
+}
+TINY_TOML = """
+name = "tiny"
+seeds = [0, 1]
+[twin]
+trials_per_point = 3
+n_unperturbed = 6
+n_calibration = 2
+bench = false
+[analysis]
+bootstrap_reps = 10
+[grid]
+"params.geometry.misalignment_anterior_m" = [0.0, 0.016]
+"""
+
+
+def test_a_grid_expands_to_every_combination_times_every_seed():
+    doc = TINY | {"grid": {"analysis.window_ms": [75.0, 100.0, 125.0], "twin.foot": ["human"]}}
+    cells = study_from_mapping(doc, origin="s").cells()
+    assert len(cells) == 3 * 1 * 2
+    assert [c.seed for c in cells[:2]] == [0, 1]
+    assert cells[2].analysis == {"bootstrap_reps": 10, "window_ms": 100.0}
+    assert len({c.key for c in cells}) == len(cells)
+
+
+def test_a_sample_is_drawn_from_its_own_seed():
+    doc = {k: v for k, v in TINY.items() if k != "grid"} | {
+        "twin": {"n_unperturbed": 6, "n_calibration": 2, "bench": False},
+        "sample": {
+            "n": 4,
+            "seed": 3,
+            "params.geometry.misalignment_anterior_m": {"uniform": [0.0, 0.02]},
+            "twin.trials_per_point": {"integers": [3, 5]},
+            "twin.foot": {"choice": ["prosthetic", "human"]},
+        },
+    }
+    first = study_from_mapping(doc, origin="s").points()
+    assert first == study_from_mapping(doc, origin="s").points()
+    assert len(first) == 4
+    assert all(0 <= p["params.geometry.misalignment_anterior_m"] <= 0.02 for p in first)
+    assert {p["twin.trials_per_point"] for p in first} <= {3, 4, 5}
+
+
+@pytest.mark.parametrize(
+    ("change", "match"),
+    [
+        ({"colour": 1}, "colour: unknown key"),
+        ({"grid": {"window_ms": [75.0]}}, "expected twin.KEY"),
+        ({"grid": {"analysis.window_ms": [75.0, -1.0]}}, "window_ms = -1.0.*window_ms"),
+        ({"grid": {"params.geometry.misalignment_anterior": [0.0]}}, "did you mean"),
+        ({"seeds": 0}, "seeds: expected a count"),
+        ({"twin": {"foot": "robot"}}, "foot"),
+        ({"grid": {"analysis.window_ms": [75.0, float("nan")]}}, r"window_ms\[1\]: .*finite"),
+        ({"grid": {"twin.trials_per_point": [3, 5]}}, "fixed setting and in \\[grid\\]"),
+        ({"grid": 1.5}, "\\[grid\\]: expected a table"),
+    ],
+)
+def test_a_bad_study_file_is_one_clear_error_naming_the_key(change, match):
+    with pytest.raises(ParameterError, match=match):
+        study_from_mapping(TINY | change, origin="study.toml")
+
+
+def test_a_failing_task_is_retried_then_recorded_with_its_error():
+    calls = []
+
+    def flaky(x):
+        calls.append(x)
+        raise RuntimeError("the twin\nfell over")
+
+    record = attempt(flaky, (1,), retries=2)
+    assert record == {"ok": False, "attempts": 3, "error": "RuntimeError: the twin fell over"}
+    assert len(calls) == 3
+    ok = attempt(lambda: {"rows": []}, (), retries=2)
+    assert ok == {"ok": True, "attempts": 1, "rows": []}
+
+
+def test_a_failed_cell_stays_in_the_tables():
+    row = {"direction": "dorsi", "delay_ms": 100.0, "n_perturbed": 3, "quantity": "cop_m",
+           "truth": 0.06, "estimate": 0.061, "sd": np.nan, "ci95_low": np.nan,
+           "ci95_high": np.nan, "interval_kind": "", "error": 0.001, "error_percent": 1.0 / 0.6,
+           "half_width_percent": np.nan, "covered": None, "poorly_determined": None,
+           "warnings": ""}  # fmt: skip
+    records = [
+        ({"cell": "a", "cell_index": 0, "seed": 0, "x": 1.0}, {"ok": True, "rows": [row]}),
+        ({"cell": "b", "cell_index": 1, "seed": 1, "x": 1.0}, {"ok": False, "error": "E: x"}),
+    ]
+    results = results_table(records, ["x"])
+    assert list(results["status"]) == ["ok", "failed"]
+    assert results["failure"].iloc[1] == "E: x"
+    summary = summary_table(results, ["x"])
+    assert summary["n_sessions"].tolist() == [1] and summary["n_failed"].tolist() == [1]
+
+
+@pytest.fixture(scope="module")
+def reference(tmp_path_factory):
+    """The tiny study, uninterrupted, on the default local scheduler."""
+    out = tmp_path_factory.mktemp("study") / "default"
+    run = run_study(study_from_mapping(TINY, origin="tiny"), out, workers=2)
+    assert run.ran == 4 and run.failed.empty
+    return out, run
+
+
+def test_the_study_table_holds_truth_estimate_interval_error_and_coverage(reference):
+    out, _ = reference
+    table = pd.read_parquet(out / "results.parquet")
+    assert set(table["quantity"]) >= {
+        "stiffness_nm_per_rad", "damping_nms_per_rad", "inertia_kgm2", "vaf_percent",
+        "stiffness_change_fraction", "cop_m",
+    }  # fmt: skip
+    stiffness = table[table["quantity"] == "stiffness_nm_per_rad"]
+    # the analysis's 95 % interval; a condition of one trial has none: mean ± 1.96 sd, named so
+    assert set(stiffness["interval_kind"]) == {"ci95", "mean±1.96sd"}
+    single = stiffness[stiffness["interval_kind"] == "mean±1.96sd"]
+    assert (single["n_perturbed"] == 1).all()
+    assert (stiffness["ci95_low"] <= stiffness["ci95_high"]).all()
+    assert set(stiffness["stiffness_model"]) <= {"constant", "linear"}
+    assert stiffness["poorly_determined"].isin([True, False]).all()
+    assert table.loc[table["quantity"] == "cop_m", "poorly_determined"].isna().all()
+    change = table[table["quantity"] == "stiffness_change_fraction"]
+    assert change["truth"].notna().all()  # the twin's within-window change, for the estimate
+    np.testing.assert_allclose(stiffness["error"], stiffness["estimate"] - stiffness["truth"])
+    assert stiffness["error_percent"].abs().max() < 25  # tiny sessions, but the right answer
+    summary = pd.read_csv(out / "summary.csv")
+    assert {"bias_percent", "sd_percent", "rmse_percent", "coverage",
+            "poorly_determined_fraction"} <= set(summary.columns)  # fmt: skip
+    assert (out / "figures" / "stiffness_error_vs_misalignment_anterior_m.png").is_file()
+    assert len(pd.read_csv(out / "cells.csv")) == 4
+
+
+def test_a_local_cluster_over_tcp_gives_identical_tables(reference, tmp_path):
+    out, _ = reference
+    study = study_from_mapping(TINY, origin="tiny")
+    run_study(study, tmp_path / "cluster", scheduler="local-cluster", workers=2, figures=False)
+    for name in ("results.parquet", "results.csv", "summary.parquet", "summary.csv"):
+        assert (tmp_path / "cluster" / name).read_bytes() == (out / name).read_bytes(), name
+
+
+def test_a_killed_study_resumes_to_the_same_table(reference, tmp_path):
+    out, _ = reference
+    study_file = tmp_path / "tiny.toml"
+    study_file.write_text(TINY_TOML, encoding="utf-8")
+    target = tmp_path / "killed"
+    command = [sys.executable, "-c", "from anklelab.cli import run; run()", "study",
+               str(study_file), "--out", str(target), "--workers", "1", "--no-figures"]  # fmt: skip
+    proc = subprocess.Popen(command, start_new_session=True, stderr=subprocess.DEVNULL)
+    cells = checkpoint_for(target)
+    deadline = time.monotonic() + 240
+    while time.monotonic() < deadline and len(list(cells.glob("*.json"))) < 1:
+        time.sleep(0.2)
+    os.killpg(proc.pid, signal.SIGKILL)  # the command and its worker processes
+    proc.wait()
+    done = len(list(cells.glob("*.json")))
+    assert 1 <= done < 4, f"{done} cells written before the kill"
+    assert not target.exists()  # the output appears only when the study completes
+    resumed = subprocess.run(command, capture_output=True, text=True, timeout=600)
+    assert resumed.returncode == 0, resumed.stderr
+    assert f"({done} already done, {4 - done} run)" in resumed.stdout
+    assert (target / "results.csv").read_bytes() == (out / "results.csv").read_bytes()
+    assert not cells.exists() and len(list((target / "cells").glob("*.json"))) == 4
+    manifest = RunManifest.load(target)
+    assert manifest.command == "study" and "results.parquet" in manifest.files
+    assert manifest.settings["study"]["seeds"] == [0, 1]
+    again = subprocess.run(command, capture_output=True, text=True, timeout=60)
+    assert again.returncode == 2
+    refused = f"error: --out {target}: already exists; pass --force to replace it"
+    assert again.stderr.strip() == refused
+
+
+def test_a_directory_that_is_no_study_output_is_never_replaced(reference, tmp_path):
+    out, _ = reference  # written by run_study itself: no run.json
+    study_file = tmp_path / "other.toml"
+    study_file.write_text(TINY_TOML.replace("[0, 1]", "[5]"), encoding="utf-8")
+    proc = subprocess.run(
+        [sys.executable, "-c", "from anklelab.cli import run; run()", "study", str(study_file),
+         "--out", str(out), "--force"],
+        capture_output=True, text=True, timeout=60,
+    )  # fmt: skip
+    assert proc.returncode == 2
+    assert "not replaced: it has no run.json" in proc.stderr
+    assert not checkpoint_for(out).exists()
+
+
+def test_design_recommendation_reaches_the_target_when_simulated(tmp_path):
+    target = 8.0
+    options = dict(analysis={"bootstrap_reps": 30}, n_calibration=2, workers=2, figures=False)
+    design = design_trials(tmp_path / "design", interval_percent=target, change_percent=15.0,
+                           pilot=(6, 12), seeds=2, **options)  # fmt: skip
+    assert design.recommended == max(design.for_interval, design.for_power)
+    assert design.curve["half_width_percent"][design.recommended - 2] <= target
+    assert (tmp_path / "design" / "design.json").is_file()
+    # fresh sessions at the recommended count: every condition's interval within the target
+    check = dict(TINY) | {
+        "seeds": [20, 21],
+        "twin": {"trials_per_point": design.recommended, "unperturbed_per_point": 4.0,
+                 "n_calibration": 2, "bench": False},
+        "analysis": {"bootstrap_reps": 30},
+    }  # fmt: skip
+    check.pop("grid")
+    run = run_study(study_from_mapping(check, origin="check"), tmp_path / "check", workers=2,
+                    figures=False)  # fmt: skip
+    rows = run.results[run.results["quantity"] == "stiffness_nm_per_rad"]
+    widths = rows.groupby(["direction", "delay_ms"])["half_width_percent"].mean()
+    assert widths.max() <= target, widths.to_dict()
+
+
+def test_batch_analyses_sessions_into_a_group_table(tmp_path):
+    from typer.testing import CliRunner
+
+    from anklelab.cli import app
+    from anklelab.data import save_session
+    from anklelab.experiments import simulate_perturberator
+
+    paths = []
+    for i, foot in enumerate(("prosthetic", "human")):
+        session = simulate_perturberator(trials_per_point=4, n_unperturbed=8, n_calibration=2,
+                                         bench=False, seed=i, foot=foot)  # fmt: skip
+        paths.append(save_session(session, tmp_path / f"S{i}" / "day1.h5"))
+    broken = tmp_path / "S9" / "day1"
+    broken.mkdir(parents=True)
+    settings = tmp_path / "settings.toml"
+    settings.write_text("bootstrap_reps = 10\n")
+    out = tmp_path / "out"
+    args = ["batch", *map(str, [*paths, broken]), "--out", str(out), "--workers", "1",
+            "--settings", str(settings)]  # fmt: skip
+    result = CliRunner().invoke(app, args)
+    assert result.exit_code == 1, result.output  # one session failed, named
+    assert "warning: S9-day1:" in result.output and "session.toml" in result.output
+    group = pd.read_csv(out / "group.csv")
+    assert set(group.loc[group["status"] == "ok", "subject"]) == {"twin-prosthetic", "twin-human"}
+    assert (group["status"] == "failed").sum() == 1
+    assert {"ci95_low", "ci95_high", "sd", "poorly_determined", "stiffness_model"} <= set(group)
+    pooled = pd.read_csv(out / "pooled.csv")
+    assert (pooled["n_subjects"] <= 2).all() and (pooled["n_subjects"] == 2).any()
+    for name in ("S0-day1", "S1-day1"):
+        assert (out / "sessions" / name / "results.json").is_file()
+    assert (out / "figures" / "stiffness_pooled.png").is_file()
+    manifest = RunManifest.load(out)
+    assert manifest.command == "batch" and manifest.settings["bootstrap_reps"] == 10
+    recorded = {Path(i["path"]).name for i in manifest.inputs}
+    assert {"day1.h5", "settings.toml"} <= recorded and not checkpoint_for(out).exists()
+
+
+EXAMPLE_STUDIES = sorted(
+    (Path(__file__).resolve().parents[1] / "examples" / "studies").glob("*.toml")
+)
+
+
+@pytest.mark.parametrize("path", EXAMPLE_STUDIES, ids=lambda p: p.name)
+def test_example_study_files_are_valid_studies(path):
+    from anklelab.studies import load_study
+
+    study = load_study(path)
+    assert study.varied and len(study.cells()) >= 9
+
+
+def test_a_bad_study_file_ends_in_one_error_line_and_exit_code_2(tmp_path):
+    bad = tmp_path / "bad.toml"
+    bad.write_text(TINY_TOML.replace("[twin]", "colour = 1\n[twin]"), encoding="utf-8")
+    proc = subprocess.run(
+        [sys.executable, "-c", "from anklelab.cli import run; run()", "study", str(bad),
+         "--out", str(tmp_path / "out")],
+        capture_output=True, text=True,
+    )  # fmt: skip
+    assert proc.returncode == 2
+    assert proc.stderr.strip().splitlines() == [f"error: {bad}: colour: unknown key"]
+    assert not (tmp_path / "out").exists()
