@@ -43,7 +43,7 @@ from anklelab.data.capstan_ident import IdentData, IdentRun
 from anklelab.errors import NotFittedError, ParameterError, SessionFormatError
 from anklelab.platforms.capstan import FrictionParameters
 from anklelab.signals.metrics import vaf
-from anklelab.sim.capstan.friction import friction_array, friction_step, friction_torque
+from anklelab.sim.capstan.friction_law import friction_array, friction_step, friction_torque
 
 __all__ = ["FrictionIdentifier", "SpindownFit", "read_friction_json"]
 
