@@ -27,7 +27,7 @@ def capstan_ident(
     `anklelab identify friction`.
     """
     from anklelab.commands._progress import recording_progress
-    from anklelab.experiments.capstan_ident import (
+    from anklelab.experiments import (
         IdentProtocol,
         simulate_ident,
         write_ident_directory,

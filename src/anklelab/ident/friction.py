@@ -174,7 +174,7 @@ class FrictionIdentifier:
 
     Examples
     --------
-    >>> from anklelab.experiments.capstan_ident import simulate_ident
+    >>> from anklelab.experiments.capstan import simulate_ident
     >>> model = FrictionIdentifier().fit(simulate_ident(seed=1))
     >>> round(model.inertia_kgm2_ / 7.54e-4, 2), round(model.coulomb_nm_["ccw"] / 0.038, 2)
     (1.0, 1.0)

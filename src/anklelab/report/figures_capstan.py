@@ -12,8 +12,8 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 if TYPE_CHECKING:
+    from anklelab.data.capstan_ident import IdentData
     from anklelab.experiments.capstan import ChirpMetrics, StepMetrics
-    from anklelab.experiments.capstan_ident import IdentData
     from anklelab.ident.friction import FrictionIdentifier
     from anklelab.sim.capstan import SimulationResult
 

@@ -1,7 +1,6 @@
-"""Friction and inertia identification data of the capstan platform, made on the twin.
+"""Paper 001's friction and inertia identification tests, run on the capstan twin.
 
-The data and its directory (DESIGN.md section 6) live in :mod:`anklelab.data.capstan_ident`;
-their names are re-exported here.
+The data they produce and its directory format live in :mod:`anklelab.data.capstan_ident`.
 
 :func:`simulate_ident` runs paper 001's two tests on the twin with the cable disconnected: for
 each of four speeds in each direction, a speed-controlled ramp from rest (which breaks the shaft
@@ -20,29 +19,13 @@ import numpy as np
 
 from anklelab.control.pid import PIDGains
 from anklelab.control.safety import SafetyLimits
-from anklelab.data.capstan_ident import (
-    CHIRP_COLUMNS,
-    SPINDOWN_COLUMNS,
-    IdentData,
-    IdentRun,
-    read_ident_directory,
-    write_ident_directory,
-)
-from anklelab.experiments.capstan import CapstanSetup, simulate_closed_loop
+from anklelab.data.capstan_ident import IdentData, IdentRun
+from anklelab.experiments.capstan.closed_loop import simulate_closed_loop
+from anklelab.experiments.capstan.config import CapstanSetup
 from anklelab.platforms import load_platform
 from anklelab.platforms.capstan import CapstanParameters
 
-__all__ = [
-    "CHIRP_COLUMNS",
-    "SPINDOWN_COLUMNS",
-    "IdentData",
-    "IdentProtocol",
-    "IdentRun",
-    "friction_truth",
-    "read_ident_directory",
-    "simulate_ident",
-    "write_ident_directory",
-]
+__all__ = ["IdentProtocol", "friction_truth", "simulate_ident"]
 
 
 def friction_truth(params: CapstanParameters) -> dict[str, Any]:
