@@ -1,12 +1,16 @@
-"""The compiled closed loop of the capstan twin: sensors, faults, controller, safety, observer,
-virtual environment and plant, one control tick at a time.
+"""The compiled closed loop of the capstan twin: sensors, faults, controller, feed-forward,
+rendering, person guard, safety monitor, observer, the person and the plant, one tick at a time.
 
 Every tick: the motor encoder is read (quantised to whole counts) and the current sensor (with
-its noise); an injected fault may corrupt them; the controller computes a current request; the
-safety monitor passes, clamps or (latched fault) zeroes it; the disturbance observer updates its
-estimate of the human torque from the same two readings; in admittance rendering that estimate
-drives the virtual dynamics whose state is the next reference; finally the plant advances one
-period.
+its noise); an injected fault may corrupt them; the reference is the input's (``position``), the
+equilibrium plus the admittance's virtual deflection (``admittance``), or none (``impedance``:
+the PID is off and the virtual spring-damper's torque, with the passivity controller, is the
+command); the PID (with gravity and optional friction compensation) and the optional inverse
+dynamics feed-forward compute a current request, plus the input's feed-forward current; a
+disabled drive asks for nothing; the person guard limits what reaches the person and runs the
+fall-safe stop; the safety monitor passes, clamps or (latched fault) zeroes the request; the
+disturbance observer updates its estimate of the human torque; the person (if any) answers the
+platform's true motion; finally the plant advances one period.
 """
 
 from __future__ import annotations
@@ -14,14 +18,18 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from anklelab.control.haptics import admittance_update, impedance_torque
+from anklelab.control._platform_model import friction_feedforward
+from anklelab.control.haptics import admittance_update, impedance_torque, new_admittance_state
 from anklelab.control.observer import new_observer_state, observer_update
+from anklelab.control.passivity import new_passivity_state, passivity_update
+from anklelab.control.person_guard import guard_update, new_guard_state
 from anklelab.control.pid import new_control_state, position_control_update
-from anklelab.control.safety import new_safety_state, safety_update
+from anklelab.control.safety import Fault, new_safety_state, safety_update
 from anklelab.sim.capstan._jit import FAST
+from anklelab.sim.capstan.person import new_person_state, person_torque
 from anklelab.sim.capstan.plant import encoder_angle, plant_advance
 
-MODES = {"position": 0, "admittance": 1, "impedance": 2, "open-loop": 3}
+MODES = {"position": 0, "admittance": 1, "impedance": 2}
 FAULTS = {
     "none": 0,
     "encoder-nan": 1,
@@ -30,6 +38,22 @@ FAULTS = {
     "encoder-reversed": 4,
     "current-nan": 5,
 }
+INPUTS = (
+    "reference_rad",  # position: the reference; rendering: the equilibrium angle
+    "reference_speed_rad_s",
+    "reference_acceleration_rad_s2",
+    "feedforward_current_a",
+    "stiffness_nm_per_rad",  # rendering, per tick (inf: rigid ground in admittance)
+    "damping_nms_per_rad",
+    "enabled",  # 0: the drive's output stage is off this tick
+    "voluntary_torque_nm",
+    "person_stiffness_nm_per_rad",
+    "person_damping_nms_per_rad",
+    "person_load_nm",
+    "person_contact",
+    "current_noise_a",
+    "stop",  # nonzero: a fall-safe stop is requested
+)
 SIGNALS = (
     "reference_rad",
     "angle_rad",
@@ -47,8 +71,30 @@ SIGNALS = (
     "voluntary_torque_nm",
     "estimated_torque_nm",
     "friction_torque_nm",
+    "rendered_torque_nm",
+    "passivity_energy_j",
+    "person_torque_nm",
+    "reflex_torque_nm",
+    "guard_clamped",
     "fault",
 )
+(
+    REF,
+    REF_SPEED,
+    REF_ACCEL,
+    FF_CURRENT,
+    STIFFNESS,
+    DAMPING,
+    ENABLED,
+    VOLUNTARY,
+    P_STIFFNESS,
+    P_DAMPING,
+    P_LOAD,
+    P_CONTACT,
+    NOISE,
+    STOP,
+) = range(len(INPUTS))
+FALL_STOP = float(Fault.FALL_STOP)
 
 
 @njit(cache=True, fastmath=FAST, error_model="numpy")
@@ -58,27 +104,26 @@ def closed_loop(  # type: ignore[no-untyped-def]
     x0,
     mode,
     ctrl,
+    feedforward,
     obs,
     env,
+    guard,
+    person,
     limits,
-    reference,
-    reference_speed,
-    command,
-    voluntary,
-    current_noise,
+    inputs,
     fault_kind,
     fault_tick,
     fault_value,
     step,
     encoder_resolution,
 ):
-    """Run ``len(reference)`` ticks; returns an array ``(n, len(SIGNALS))``.
+    """Run ``len(inputs)`` ticks; returns an array ``(n, len(SIGNALS))``.
 
-    ``reference`` is the angle reference (mode ``position``; NaN disables the drive for that
-    tick), or the environment's equilibrium angle (``admittance``, ``impedance``); ``command`` is
-    the current (mode ``open-loop``).
+    ``inputs`` has one row per tick and the columns :data:`INPUTS`; ``feedforward`` (0 or 1)
+    adds the inverse dynamics ``J a_ref + F(w_ref)`` of the observer's model to the request,
+    and in admittance rendering takes the estimated human torque off the position loop.
     """
-    n = len(reference)
+    n = inputs.shape[0]
     dt = step.h * step.n_sub
     rc = plant.pulley_radius / plant.pinion_radius
     x = x0.copy()
@@ -87,12 +132,18 @@ def closed_loop(  # type: ignore[no-untyped-def]
     ctrl_state = new_control_state(first / rc)
     obs_state = new_observer_state()
     safety_state = new_safety_state()
-    virtual = np.array([first / rc, 0.0])
+    virtual = new_admittance_state()
+    passivity = new_passivity_state()
+    guard_state = new_guard_state(guard.window_ticks)
+    person_state = new_person_state(x[3], person.delay_ticks)
     frozen = 0.0
+    estimate = 0.0
+    previous = 0.0
     for k in range(n):
+        row_in = inputs[k]
         pinion = encoder_angle(x[1], plant.gear_ratio, encoder_resolution)
         angle = pinion / rc
-        current = x[0] + current_noise[k]
+        current = x[0] + row_in[NOISE]
         counter = float(k)
         if fault_kind > 0 and k >= fault_tick:
             if k == fault_tick:
@@ -107,29 +158,70 @@ def closed_loop(  # type: ignore[no-untyped-def]
                 angle = 2.0 * frozen - angle
             elif fault_kind == 5:
                 current = np.nan
+        ref, ref_speed, ref_accel = row_in[REF], row_in[REF_SPEED], row_in[REF_ACCEL]
+        stiffness, damping = row_in[STIFFNESS], row_in[DAMPING]
         if mode == 1:
-            ref, ref_speed = virtual[0], virtual[1]
-        elif mode == 0:
-            ref, ref_speed = reference[k], reference_speed[k]
-        else:
-            ref, ref_speed = angle, 0.0  # impedance and open loop: no position feedback
-        request, speed = position_control_update(
-            ctrl, ctrl_state, ref if np.isfinite(ref) else angle, ref_speed, angle
-        )
-        disabled = mode == 0 and not np.isfinite(reference[k])
-        if disabled:  # the drive's output stage is off: no current, no current noise
-            request = 0.0
+            offset, offset_speed, offset_accel = admittance_update(
+                env, virtual, estimate, stiffness, damping, ref, dt
+            )
+            ref, ref_speed, ref_accel = (
+                ref + offset,
+                ref_speed + offset_speed,
+                ref_accel + offset_accel,
+            )
         elif mode == 2:
-            request += impedance_torque(env, angle, speed, reference[k]) / ctrl.torque_per_amp
-        elif mode == 3:
-            request = command[k]
-        applied = safety_update(limits, safety_state, angle, speed, counter, current, request)
-        estimate = observer_update(obs, obs_state, angle, current)
-        if mode == 1:
-            admittance_update(env, virtual, estimate, reference[k], dt)
-        interaction, friction, voltage = plant_advance(
-            plant, law, step, x, applied, 0.0 if disabled else current_noise[k], voluntary[k]
+            ref, ref_speed, ref_accel = angle, 0.0, 0.0  # impedance: no position feedback
+        request, speed = position_control_update(ctrl, ctrl_state, ref, ref_speed, angle)
+        if feedforward != 0.0 and mode != 2:
+            torque = obs.inertia * ref_accel + friction_feedforward(obs, ref_speed)
+            if mode == 1:  # the motor takes over the estimated human torque (disturbance obs.)
+                torque -= estimate + env.lag1 * (estimate - previous) / dt
+            request += torque / ctrl.torque_per_amp
+        request += row_in[FF_CURRENT]
+        rendered = 0.0
+        if mode == 2:
+            rendered = impedance_torque(stiffness, damping, angle, speed, row_in[REF])
+            rendered, _ = passivity_update(
+                passivity,
+                rendered,
+                angle - row_in[REF],
+                speed,
+                dt,
+                env.max_passivity_damping,
+                env.passivity_control,
+            )
+            request += rendered / ctrl.torque_per_amp
+        enabled = row_in[ENABLED] != 0.0
+        if not enabled:  # the drive's output stage is off: no current, no current noise
+            request = 0.0
+        request, clamped = guard_update(
+            guard, guard_state, request, angle, speed, estimate, row_in[STOP]
         )
+        applied = safety_update(limits, safety_state, angle, speed, counter, current, request)
+        previous = estimate
+        estimate = observer_update(obs, obs_state, angle, current)
+        human, reflex = person_torque(
+            person,
+            person_state,
+            row_in[P_STIFFNESS],
+            row_in[P_DAMPING],
+            row_in[P_LOAD],
+            row_in[P_CONTACT],
+            x[3],
+            x[4],
+        )
+        interaction, friction, voltage = plant_advance(
+            plant,
+            law,
+            step,
+            x,
+            applied,
+            row_in[NOISE] if enabled else 0.0,
+            row_in[VOLUNTARY] + human,
+        )
+        fault = safety_state[0]
+        if fault == 0.0 and guard_state[0] != 0.0:
+            fault = FALL_STOP
         row = out[k]
         row[0] = ref
         row[1] = x[3]
@@ -144,8 +236,13 @@ def closed_loop(  # type: ignore[no-untyped-def]
         row[10] = current
         row[11] = voltage
         row[12] = interaction
-        row[13] = voluntary[k]
+        row[13] = row_in[VOLUNTARY]
         row[14] = estimate
         row[15] = friction
-        row[16] = safety_state[0]
+        row[16] = rendered
+        row[17] = passivity[0]
+        row[18] = human
+        row[19] = reflex
+        row[20] = clamped
+        row[21] = fault
     return out

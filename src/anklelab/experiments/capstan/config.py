@@ -16,8 +16,10 @@ from anklelab.control.safety import SafetyLimits
 from anklelab.errors import ParameterError
 from anklelab.experiments.capstan._loop import FAULTS
 from anklelab.platforms import load_platform
-from anklelab.platforms.capstan import CapstanParameters, FrictionParameters
+from anklelab.platforms.capstan import CapstanParameters, FrictionParameters, UserParameters
+from anklelab.platforms.perturberator import PerturberatorParameters
 from anklelab.sim.capstan import CapstanTwin
+from anklelab.sim.capstan.person import ACTIVITIES, Activity, person_foot
 
 __all__ = ["CapstanSetup", "FaultInjection", "Mode"]
 
@@ -60,7 +62,10 @@ class CapstanSetup:
     params : CapstanParameters
         The twin's (true) parameters.
     gains : PIDGains or None
-        Controller gains; None designs critically damped ones from ``params``.
+        Controller gains; None designs critically damped ones from ``params`` for
+        ``settling_time_s``.
+    settling_time_s : float
+        Design settling time of the PD loop when ``gains`` is None, s.
     fs : float
         Control rate, Hz.
     with_user : bool
@@ -80,10 +85,29 @@ class CapstanSetup:
         Safety limits (angle, speed, current); None takes them from ``params.safety``.
     max_step_s : float
         Longest physics sub-step, s.
+    feedforward : bool
+        Add the inverse dynamics of the controller's model, ``J a_ref + F(w_ref)`` (inertia and
+        friction of ``model_friction``), to the PID while tracking or rendering admittance.
+    lag_compensation : bool
+        Admittance rendering: compensate the observer's Q-filter lag
+        (:mod:`anklelab.control.haptics`).
+    passivity_control : bool
+        Impedance rendering: the passivity controller dissipates the energy the rendering
+        produces (:mod:`anklelab.control.passivity`).
+    person : {"standing", "walking"} or None
+        A person on the platform instead of the seated user (``with_user`` is then ignored):
+        the twin's human ankle (``human``), body weight, sway, reflex
+        (:mod:`anklelab.sim.capstan.person`).
+    human : PerturberatorParameters or None
+        Where the person's ankle, mass and gait come from; None: the shipped Perturberator set.
+    guard : bool
+        Run the person guard (torque and jerk limits, fall-safe stop) whenever someone is on
+        the platform.
     """
 
     params: CapstanParameters = field(default_factory=lambda: load_platform("capstan"))
     gains: PIDGains | None = None
+    settling_time_s: float = 0.2
     fs: float = 1000.0
     with_user: bool = True
     gravity_compensation: bool = True
@@ -93,15 +117,53 @@ class CapstanSetup:
     coupled: bool = True
     safety: SafetyLimits | None = None
     max_step_s: float = 2e-4
+    feedforward: bool = False
+    lag_compensation: bool = False
+    passivity_control: bool = False
+    person: Activity | None = None
+    human: PerturberatorParameters | None = None
+    guard: bool = True
+
+    def __post_init__(self) -> None:
+        if self.person is not None and self.person not in ACTIVITIES:
+            raise ParameterError(f"person must be one of {list(ACTIVITIES)}; got {self.person!r}")
+        if not self.fs > 0:
+            raise ParameterError(f"fs must be > 0 Hz; got {self.fs}")
+
+    @classmethod
+    def for_rendering(cls, **changes: object) -> CapstanSetup:
+        """The setup haptic rendering needs: feed-forward, lag compensation, a stiffer loop.
+
+        Admittance rendering is faithful when the position loop follows the virtual motion
+        (inverse-dynamics feed-forward, the estimated human torque taken off the loop, the
+        observer's lag compensated) and rejects what is left of the human torque: a 0.15 s
+        settling design (a 0.12 s one already oscillates through the observer and the cable).
+        ``changes`` override any field.
+        """
+        fields = {"feedforward": True, "lag_compensation": True, "settling_time_s": 0.15}
+        return cls(**(fields | changes))  # type: ignore[arg-type]
 
     def resolved_gains(self) -> PIDGains:
         """The gains in use."""
-        return self.gains if self.gains is not None else design_critically_damped(self.params)
+        if self.gains is not None:
+            return self.gains
+        return design_critically_damped(self.params, settling_time_s=self.settling_time_s)
+
+    def resolved_human(self) -> PerturberatorParameters:
+        """Where the person's ankle, mass and gait come from."""
+        return load_platform("perturberator") if self.human is None else self.human
+
+    def foot(self) -> UserParameters | None:
+        """What rests on the platform: the person's foot, the seated user, or nothing."""
+        if self.person is not None:
+            return person_foot(self.resolved_human())
+        return self.params.user if self.with_user else None
 
     def twin(self) -> CapstanTwin:
         """The plant."""
-        user = self.params.user if self.with_user else None
-        return CapstanTwin(self.params, user, coupled=self.coupled, max_step_s=self.max_step_s)
+        return CapstanTwin(
+            self.params, self.foot(), coupled=self.coupled, max_step_s=self.max_step_s
+        )
 
     def safety_limits(self) -> SafetyLimits:
         """The safety limits in force: ``safety``, or those of ``params.safety``."""

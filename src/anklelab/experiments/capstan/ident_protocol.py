@@ -142,7 +142,7 @@ def simulate_ident(
             profile = 0.5 * (1 - np.cos(np.pi * ramp))
             w_ref = sign * speed * profile / rc
             angle_ref = np.cumsum(w_ref) / fs
-            angle_ref[t >= protocol.ramp_s + protocol.hold_s] = np.nan  # cut: the shaft coasts
+            driven = t < protocol.ramp_s + protocol.hold_s  # then the current is cut: it coasts
             # the shaft rests anywhere within an encoder count
             offset = rng.uniform(0.0, params.encoder.resolution_rad / params.gearhead.ratio) / rc
             result = simulate_closed_loop(
@@ -150,6 +150,7 @@ def simulate_ident(
                 t.size,
                 reference=angle_ref + offset,
                 reference_speed=w_ref,
+                enabled=driven,
                 angle0=offset,
                 seed=rng,
             )
