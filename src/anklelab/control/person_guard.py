@@ -135,9 +135,12 @@ def guard_update(
         wanted = -c.brake_damping * speed
     else:
         wanted = request * c.torque_per_amp - gravity
-    limited = min(max(wanted, -c.torque_limit), c.torque_limit)
-    step = min(max(limited - state[2], -c.torque_step), c.torque_step)
-    torque = state[2] + step
+    torque, clamped = wanted, 0.0
+    if abs(torque) > c.torque_limit:
+        torque, clamped = math.copysign(c.torque_limit, torque), 1.0
+    if abs(torque - state[2]) > c.torque_step:
+        torque, clamped = state[2] + math.copysign(c.torque_step, torque - state[2]), 1.0
     state[2] = torque
-    clamped = 1.0 if torque != wanted and state[0] == 0.0 else 0.0
+    if state[0] != 0.0:
+        clamped = 0.0  # braking: the limits shape the stop, they do not clamp a request
     return (torque + gravity) / c.torque_per_amp, clamped

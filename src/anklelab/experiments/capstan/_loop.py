@@ -15,6 +15,8 @@ platform's true motion; finally the plant advances one period.
 
 from __future__ import annotations
 
+from typing import NamedTuple
+
 import numpy as np
 from numba import njit
 
@@ -97,6 +99,16 @@ SIGNALS = (
 FALL_STOP = float(Fault.FALL_STOP)
 
 
+class FeedforwardConstants(NamedTuple):
+    """The inverse-dynamics feed-forward: on (1.0) or off, and the nominal load it adds to the
+    observer's model: total inertia, and the seated user's ankle stiffness and damping."""
+
+    on: float
+    inertia: float
+    stiffness: float
+    damping: float
+
+
 @njit(cache=True, fastmath=FAST, error_model="numpy")
 def closed_loop(  # type: ignore[no-untyped-def]
     plant,
@@ -119,9 +131,10 @@ def closed_loop(  # type: ignore[no-untyped-def]
 ):
     """Run ``len(inputs)`` ticks; returns an array ``(n, len(SIGNALS))``.
 
-    ``inputs`` has one row per tick and the columns :data:`INPUTS`; ``feedforward`` (0 or 1)
-    adds the inverse dynamics ``J a_ref + F(w_ref)`` of the observer's model to the request,
-    and in admittance rendering takes the estimated human torque off the position loop.
+    ``inputs`` has one row per tick and the columns :data:`INPUTS`; ``feedforward``
+    (:class:`FeedforwardConstants`) adds the inverse dynamics ``J a_ref + b_u w_ref + K_u
+    theta_ref + F(w_ref)`` (the observer's model, the seated user's nominal foot and ankle) to
+    the request, and in admittance rendering takes the estimated human torque off the loop.
     """
     n = inputs.shape[0]
     dt = step.h * step.n_sub
@@ -172,10 +185,15 @@ def closed_loop(  # type: ignore[no-untyped-def]
         elif mode == 2:
             ref, ref_speed, ref_accel = angle, 0.0, 0.0  # impedance: no position feedback
         request, speed = position_control_update(ctrl, ctrl_state, ref, ref_speed, angle)
-        if feedforward != 0.0 and mode != 2:
-            torque = obs.inertia * ref_accel + friction_feedforward(obs, ref_speed)
-            if mode == 1:  # the motor takes over the estimated human torque (disturbance obs.)
+        if feedforward.on != 0.0 and mode != 2:
+            torque = friction_feedforward(obs, ref_speed)
+            if mode == 1:  # the motor takes over the estimated human torque (disturbance obs.),
+                # foot included: the platform alone is left to accelerate
+                torque += obs.inertia * ref_accel
                 torque -= estimate + env.lag1 * (estimate - previous) / dt
+            else:
+                torque += feedforward.inertia * ref_accel
+                torque += feedforward.stiffness * ref + feedforward.damping * ref_speed
             request += torque / ctrl.torque_per_amp
         request += row_in[FF_CURRENT]
         rendered = 0.0

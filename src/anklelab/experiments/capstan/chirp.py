@@ -1,4 +1,6 @@
-"""Chirp tracking on the capstan twin and the measured closed-loop response (paper 001, Fig. 5)."""
+"""Chirp tracking on the capstan twin and the measured closed-loop response (paper 001, Fig. 5),
+by the PID alone, with the inverse-dynamics feed-forward, or with the zero-phase-error tracking
+controller (:mod:`anklelab.control.tracking`) on top."""
 
 from __future__ import annotations
 
@@ -8,6 +10,8 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from anklelab.control.tracking import closed_loop_model, reference_derivatives, zpetc_reference
+from anklelab.errors import ParameterError
 from anklelab.experiments.capstan.closed_loop import simulate_closed_loop
 from anklelab.experiments.capstan.config import CapstanSetup
 from anklelab.sim.capstan import SimulationResult
@@ -31,6 +35,11 @@ class ChirpMetrics:
         First frequency where the gain falls below -3 dB (inf if it does not in the sweep).
     bandwidth_45deg_hz : float
         First frequency where the phase lag exceeds 45 degrees (inf if it does not).
+    tracking_limit_hz : float
+        The frequency from which on the response stays outside 1 dB in gain or 20 degrees in
+        phase to the sweep's end (inf if it is within at the end). Friction makes slow,
+        small motions stick and slip: the response may stray outside at the low end and come
+        back; this limit is the one that lasts.
     """
 
     rms_error_rad: float
@@ -41,17 +50,32 @@ class ChirpMetrics:
     phase_deg: NDArray[np.float64]
     bandwidth_3db_hz: float
     bandwidth_45deg_hz: float
+    tracking_limit_hz: float
 
 
 def chirp_reference(
     amplitude_rad: float, f0_hz: float, f1_hz: float, duration_s: float, fs: float
-) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-    """Linear chirp ``A sin(2 pi (f0 t + (f1 - f0) t^2 / (2 T)))`` and its derivative."""
+) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
+    """Linear chirp ``A sin(2 pi (f0 t + (f1 - f0) t^2 / (2 T)))``, its speed and acceleration.
+
+    Examples
+    --------
+    >>> angle, speed, acceleration = chirp_reference(0.1, 0.2, 5.0, 10.0, 1000.0)
+    >>> angle.shape, round(float(speed[0]), 4)            # A 2 pi f0 at t = 0
+    ((10000,), 0.1257)
+    """
+    if not (amplitude_rad > 0 and 0 < f0_hz < f1_hz < fs / 2 and duration_s > 0):
+        raise ParameterError(
+            "chirp: expected amplitude > 0, 0 < start < end frequency < fs/2 and duration > 0; "
+            f"got {amplitude_rad}, {f0_hz}, {f1_hz} Hz, {duration_s} s at {fs} Hz"
+        )
     t = np.arange(round(duration_s * fs)) / fs
     rate = (f1_hz - f0_hz) / duration_s
     phase = 2 * np.pi * (f0_hz * t + 0.5 * rate * t**2)
-    speed = amplitude_rad * np.cos(phase) * 2 * np.pi * (f0_hz + rate * t)
-    return amplitude_rad * np.sin(phase), speed
+    omega = 2 * np.pi * (f0_hz + rate * t)
+    speed = amplitude_rad * np.cos(phase) * omega
+    acceleration = amplitude_rad * (-np.sin(phase) * omega**2 + np.cos(phase) * 2 * np.pi * rate)
+    return amplitude_rad * np.sin(phase), speed, acceleration
 
 
 def _first_below(f: NDArray[np.float64], value: NDArray[np.float64], level: float) -> float:
@@ -64,6 +88,18 @@ def _first_below(f: NDArray[np.float64], value: NDArray[np.float64], level: floa
         return float(f[0])
     frac = (value[k - 1] - level) / (value[k - 1] - value[k])
     return float(f[k - 1] * (f[k] / f[k - 1]) ** frac)
+
+
+def _lasting_departure(f: NDArray[np.float64], departure: NDArray[np.float64]) -> float:
+    """Frequency from which ``departure`` stays above 1 to the end (log interpolation)."""
+    within = np.flatnonzero(departure <= 1.0)
+    if within.size == 0:
+        return float(f[0])
+    k = within[-1]
+    if k == f.size - 1:
+        return math.inf
+    frac = (1.0 - departure[k]) / (departure[k + 1] - departure[k])
+    return float(f[k] * (f[k + 1] / f[k]) ** frac)
 
 
 def chirp_metrics(
@@ -114,6 +150,7 @@ def chirp_metrics(
     ) / weight[used]
     gain = np.abs(h)
     phase = np.degrees(np.unwrap(np.angle(h)))
+    off_db = np.abs(20 * np.log10(np.maximum(gain, 1e-12)))
     return ChirpMetrics(
         rms_error_rad=float(np.sqrt(np.mean(err**2))),
         max_error_rad=float(np.max(np.abs(err))),
@@ -123,6 +160,7 @@ def chirp_metrics(
         phase_deg=phase,
         bandwidth_3db_hz=_first_below(f, gain, 10 ** (-3 / 20)),
         bandwidth_45deg_hz=_first_below(f, phase, -45.0),
+        tracking_limit_hz=_lasting_departure(f, np.maximum(off_db / 1.0, np.abs(phase) / 20.0)),
     )
 
 
@@ -134,16 +172,44 @@ def chirp_tracking(
     f1_hz: float = 5.0,
     duration_s: float = 10.0,
     rest_s: float = 2.0,
+    zpetc: bool = False,
     seed: int | np.random.Generator = 0,
 ) -> tuple[SimulationResult, ChirpMetrics]:
-    """Paper 001's chirp: 5 degrees, 0.2 to 5 Hz over 10 s (then ``rest_s`` at 0), with metrics."""
-    reference, speed = chirp_reference(amplitude_rad, f0_hz, f1_hz, duration_s, setup.fs)
+    """Paper 001's chirp: 5 degrees, 0.2 to 5 Hz over 10 s (then ``rest_s`` at 0), with metrics.
+
+    With ``setup.feedforward`` the loop adds the inverse dynamics of the chirp's exact speed and
+    acceleration; with ``zpetc`` the reference is the chirp passed through the inverse of the
+    closed loop's model (:func:`~anklelab.control.tracking.zpetc_reference`) and its
+    derivatives are backward differences, as the model assumes. The metrics always compare the
+    measured angle with the chirp itself.
+    """
+    desired, speed, acceleration = chirp_reference(
+        amplitude_rad, f0_hz, f1_hz, duration_s, setup.fs
+    )
     rest = np.zeros(round(rest_s * setup.fs))
-    reference, speed = np.concatenate([reference, rest]), np.concatenate([speed, rest])
+    desired = np.concatenate([desired, rest])
+    reference = desired
+    speed, acceleration = np.concatenate([speed, rest]), np.concatenate([acceleration, rest])
+    if zpetc:
+        model = closed_loop_model(
+            setup.params,
+            setup.resolved_gains(),
+            setup.fs,
+            feedforward=setup.feedforward,
+            user=setup.foot(),
+            model_friction=setup.model_friction,
+        )
+        reference = zpetc_reference(desired, model)
+        speed, acceleration = reference_derivatives(reference, setup.fs)
     result = simulate_closed_loop(
-        setup, reference.size, reference=reference, reference_speed=speed, seed=seed
+        setup,
+        reference.size,
+        reference=reference,
+        reference_speed=speed,
+        reference_acceleration=acceleration,
+        seed=seed,
     )
     metrics = chirp_metrics(
-        reference, result["measured_angle_rad"], setup.fs, f0_hz, f1_hz, duration_s=duration_s
+        desired, result["measured_angle_rad"], setup.fs, f0_hz, f1_hz, duration_s=duration_s
     )
     return result, metrics

@@ -17,7 +17,14 @@ from anklelab.control.observer import observer_constants
 from anklelab.control.person_guard import guard_constants
 from anklelab.control.pid import control_constants
 from anklelab.errors import ParameterError
-from anklelab.experiments.capstan._loop import FAULTS, INPUTS, MODES, SIGNALS, closed_loop
+from anklelab.experiments.capstan._loop import (
+    FAULTS,
+    INPUTS,
+    MODES,
+    SIGNALS,
+    FeedforwardConstants,
+    closed_loop,
+)
 from anklelab.experiments.capstan.config import CapstanSetup, FaultInjection, Mode
 from anklelab.sim.capstan import SimulationResult
 from anklelab.sim.capstan.person import person_constants, person_profile
@@ -160,7 +167,12 @@ def simulate_closed_loop(
         twin.rest_state(angle0),
         MODES["position" if mode == "open-loop" else mode],
         ctrl,
-        1.0 if setup.feedforward and not passive else 0.0,
+        FeedforwardConstants(
+            on=1.0 if setup.feedforward and not passive else 0.0,
+            inertia=obs.inertia + (foot.foot_inertia_kgm2 if foot else 0.0),
+            stiffness=foot.ankle_stiffness_nm_per_rad if foot else 0.0,
+            damping=foot.ankle_damping_nms_per_rad if foot else 0.0,
+        ),
         obs,
         env.constants(lag=lag, passivity_control=setup.passivity_control),
         guard,

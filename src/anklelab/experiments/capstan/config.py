@@ -132,15 +132,11 @@ class CapstanSetup:
 
     @classmethod
     def for_rendering(cls, **changes: object) -> CapstanSetup:
-        """The setup haptic rendering needs: feed-forward, lag compensation, a stiffer loop.
-
-        Admittance rendering is faithful when the position loop follows the virtual motion
-        (inverse-dynamics feed-forward, the estimated human torque taken off the loop, the
-        observer's lag compensated) and rejects what is left of the human torque: a 0.15 s
-        settling design (a 0.12 s one already oscillates through the observer and the cable).
-        ``changes`` override any field.
+        """The setup faithful admittance rendering needs: the position loop follows the virtual
+        motion with the inverse-dynamics feed-forward, the estimated human torque taken off the
+        loop, and the observer's lag compensated. ``changes`` override any field.
         """
-        fields = {"feedforward": True, "lag_compensation": True, "settling_time_s": 0.15}
+        fields = {"feedforward": True, "lag_compensation": True}
         return cls(**(fields | changes))  # type: ignore[arg-type]
 
     def resolved_gains(self) -> PIDGains:

@@ -1,0 +1,339 @@
+"""What the ``anklelab capstan`` commands share: one options object for the platform, control
+rate, person, compensation, friction model, seed and output, the option types with their
+checks, the group that turns every usage error into one ``error:`` line, and the output side
+(refuse to replace without ``--force``, record version, settings and input hashes).
+
+Nothing here imports the implementation (numpy, the twin): ``anklelab --help`` stays fast.
+"""
+
+import functools
+import hashlib
+import inspect
+import json
+import math
+import typing
+from collections.abc import Callable, Iterable, Sequence
+from dataclasses import asdict, dataclass, field
+from enum import Enum
+from pathlib import Path
+from typing import Annotated, Any
+
+import typer
+from rich.console import Console
+from rich.table import Table
+from typer._click.exceptions import UsageError
+from typer.core import TyperGroup
+
+from anklelab._version import __version__
+from anklelab.errors import ParameterError
+
+
+class OneLineErrors(TyperGroup):
+    """A command group whose usage errors (bad option values, unknown options or commands) end
+    in one ``error:`` line and exit code 2, like every other bad input."""
+
+    def invoke(self, ctx: Any) -> Any:
+        try:
+            return super().invoke(ctx)
+        except UsageError as exc:
+            where = exc.ctx.command_path if exc.ctx is not None else ctx.command_path
+            raise ParameterError(f"{where}: {exc.format_message()}") from None
+
+
+class Person(str, Enum):
+    """Who stands on the platform."""
+
+    none = "none"
+    seated = "seated"
+    standing = "standing"
+    walking = "walking"
+
+
+def number(
+    *, low: float | None = None, high: float | None = None, strict: bool = False
+) -> Callable[[Any, Any, float], float]:
+    """An option callback accepting only finite numbers within ``[low, high]`` (``strict``:
+    ``(low, high]``)."""
+
+    def check(ctx: Any, param: Any, value: float) -> float:
+        name = "/".join(param.opts) if param is not None else "value"
+        bounds = []
+        if low is not None:
+            bounds.append(f"{'>' if strict else '>='} {low:g}")
+        if high is not None:
+            bounds.append(f"<= {high:g}")
+        wanted = f"a finite number {' and '.join(bounds)}" if bounds else "a finite number"
+        bad = not math.isfinite(value)
+        bad |= low is not None and (value <= low if strict else value < low)
+        bad |= high is not None and value > high
+        if bad:
+            raise ParameterError(f"{name}: expected {wanted}; got {value:g}")
+        return value
+
+    return check
+
+
+def input_file(path: Path | None, what: str) -> Path | None:
+    """``path`` if it names an existing regular file; else a :class:`ParameterError`."""
+    if path is None:
+        return None
+    if not path.exists():
+        raise ParameterError(f"{path}: {what} not found")
+    if not path.is_file():
+        raise ParameterError(f"{path}: {what} must be a regular file, not a directory or device")
+    return path
+
+
+def sha256(path: Path) -> str:
+    """SHA-256 of a file's bytes."""
+    return hashlib.sha256(path.read_bytes()).hexdigest()
+
+
+# ------------------------------------------------------------------------- the shared options
+
+ParamsOption = Annotated[
+    Path | None,
+    typer.Option(
+        "--params",
+        help="A capstan parameter file (TOML, like `anklelab platform show capstan`) instead "
+        "of the shipped one.",
+        show_default=False,
+    ),
+]
+RateOption = Annotated[
+    float,
+    typer.Option(
+        "--sample-rate",
+        help="Control rate, Hz (1000-10000).",
+        callback=number(low=1000.0, high=10000.0),
+    ),
+]
+PersonOption = Annotated[
+    Person,
+    typer.Option(
+        help="Who is on the platform: nobody, the relaxed seated user, or a standing or "
+        "stepping person (the twin's human ankle, body weight, sway and stretch reflex).",
+    ),
+]
+GravityOption = Annotated[
+    bool, typer.Option("--gravity/--no-gravity", help="Feed-forward gravity compensation.")
+]
+FrictionCompOption = Annotated[
+    float,
+    typer.Option(
+        "--friction-comp",
+        help="Fraction (0-1) of the model friction compensated.",
+        callback=number(low=0.0, high=1.0),
+    ),
+]
+FrictionModelOption = Annotated[
+    Path | None,
+    typer.Option(
+        "--friction-model",
+        help="friction.json from `anklelab identify friction`: the controller's and "
+        "observer's model (default: the twin's true friction).",
+        show_default=False,
+    ),
+]
+SettlingOption = Annotated[
+    float,
+    typer.Option(
+        "--settling-time",
+        help="Design settling time of the position loop, s.",
+        callback=number(low=0.0, high=10.0, strict=True),
+    ),
+]
+SeedOption = Annotated[int, typer.Option(help="Random seed (sensor noise, the person's sway).")]
+OutOption = Annotated[
+    Path | None,
+    typer.Option(
+        "--out",
+        "-o",
+        help="Directory for the results (JSON) and figures (PNG).",
+        show_default=False,
+    ),
+]
+ForceOption = Annotated[
+    bool, typer.Option("--force", help="Replace result files that already exist in --out.")
+]
+
+
+@dataclass(frozen=True)
+class SetupOptions:
+    """The options every simulating ``capstan`` command takes, gathered."""
+
+    params: Path | None
+    sample_rate: float
+    person: Person
+    gravity: bool
+    friction_comp: float
+    friction_model: Path | None
+    settling_time: float
+    seed: int
+    out: Path | None
+    force: bool
+    inputs: dict[str, Path] = field(default_factory=dict, compare=False)
+
+    def setup(self, **changes: Any) -> Any:
+        """The :class:`~anklelab.experiments.capstan.CapstanSetup` these options describe;
+        ``changes`` override or add fields (e.g. ``feedforward=True``)."""
+        from anklelab.experiments.capstan import CapstanSetup
+        from anklelab.ident.friction import read_friction_json
+
+        platform = self.platform()
+        model = None
+        if input_file(self.friction_model, "friction model (friction.json)") is not None:
+            model = read_friction_json(
+                self.friction_model, stribeck_exponent=platform.friction.stribeck_exponent
+            )
+            self.inputs["friction_model"] = self.friction_model  # type: ignore[index]
+        person = self.person.value
+        fields: dict[str, Any] = {
+            "params": platform,
+            "settling_time_s": self.settling_time,
+            "fs": self.sample_rate,
+            "with_user": person == "seated",
+            "person": person if person in ("standing", "walking") else None,
+            "gravity_compensation": self.gravity,
+            "friction_compensation": self.friction_comp,
+            "model_friction": model,
+        }
+        return CapstanSetup(**(fields | changes))
+
+    def platform(self) -> Any:
+        """The capstan parameters (``--params`` or the shipped set)."""
+        from anklelab.platforms import load_platform
+
+        if input_file(self.params, "parameter file") is not None:
+            self.inputs["params"] = self.params  # type: ignore[index]
+        return load_platform("capstan", self.params)
+
+    def check_outputs(self, names: Iterable[str]) -> None:
+        """Refuse, before any work, to replace existing results without ``--force`` or to write
+        over an input file."""
+        if self.out is None:
+            return
+        if self.out.exists() and not self.out.is_dir():
+            raise ParameterError(f"{self.out}: --out must be a directory; this is a file")
+        inputs = {p.resolve() for p in (self.params, self.friction_model) if p is not None}
+        for name in names:
+            target = self.out / name
+            if target.resolve() in inputs:
+                raise ParameterError(f"{target}: is an input of this command; choose another --out")
+            if target.exists() and not self.force:
+                raise ParameterError(
+                    f"{target}: already exists; pass --force to replace it, or choose another --out"
+                )
+
+    def write_json(self, name: str, command: str, settings: dict[str, Any], results: Any) -> None:
+        """Write ``OUT/name``: version, command, settings, input hashes and the results."""
+        if self.out is None:
+            return
+        from anklelab._atomic import write_text_atomic
+
+        document = {
+            "anklelab_version": __version__,
+            "command": f"anklelab capstan {command}",
+            "settings": _jsonable(asdict(self) | settings),
+            "inputs": {k: {"path": str(p), "sha256": sha256(p)} for k, p in self.inputs.items()},
+            "results": _jsonable(results),
+        }
+        text = json.dumps(document, indent=2, allow_nan=False) + "\n"
+        write_text_atomic(self.out / name, text)
+
+
+def _jsonable(value: Any) -> Any:
+    """Plain JSON values: enums by value, paths as text, arrays as lists, non-finite as None."""
+    if isinstance(value, Enum):
+        return value.value
+    if isinstance(value, Path):
+        return str(value)
+    if isinstance(value, dict):
+        return {str(k): _jsonable(v) for k, v in value.items() if k != "inputs"}
+    if isinstance(value, list | tuple):
+        return [_jsonable(v) for v in value]
+    if hasattr(value, "tolist"):
+        return _jsonable(value.tolist())
+    if isinstance(value, float) and not math.isfinite(value):
+        return None
+    return value
+
+
+_SHARED: tuple[tuple[str, Any, Any], ...] = (
+    ("params", ParamsOption, None),
+    ("sample_rate", RateOption, 1000.0),
+    ("person", PersonOption, Person.seated),
+    ("gravity", GravityOption, True),
+    ("friction_comp", FrictionCompOption, 0.0),
+    ("friction_model", FrictionModelOption, None),
+    ("settling_time", SettlingOption, 0.2),
+    ("seed", SeedOption, 0),
+    ("out", OutOption, None),
+    ("force", ForceOption, False),
+)
+
+
+def with_setup_options(
+    **defaults: Any,
+) -> Callable[[Callable[..., None]], Callable[..., None]]:
+    """Give a command the shared options; it receives them as ``options: SetupOptions``.
+
+    ``defaults`` change a shared option's default for this command (``settling_time=0.15``).
+    """
+
+    def decorate(command: Callable[..., None]) -> Callable[..., None]:
+        hints = typing.get_type_hints(command, include_extras=True)
+        own = [
+            p.replace(annotation=hints.get(p.name, p.annotation))
+            for p in inspect.signature(command).parameters.values()
+            if p.name != "options"
+        ]
+        shared = [
+            inspect.Parameter(
+                name,
+                inspect.Parameter.KEYWORD_ONLY,
+                default=defaults.get(name, default),
+                annotation=annotation,
+            )
+            for name, annotation, default in _SHARED
+        ]
+
+        @functools.wraps(command)
+        def run(**kwargs: Any) -> None:
+            options = SetupOptions(**{name: kwargs.pop(name) for name, _, _ in _SHARED})
+            command(options=options, **kwargs)
+
+        parameters = [p.replace(kind=inspect.Parameter.KEYWORD_ONLY) for p in own] + shared
+        run.__signature__ = inspect.Signature(parameters)  # type: ignore[attr-defined]
+        run.__annotations__ = {p.name: p.annotation for p in parameters}
+        del run.__wrapped__  # typer must read the new signature, not the wrapped one
+        return run
+
+    return decorate
+
+
+# --------------------------------------------------------------------------------- printing
+
+
+def table(title: str, columns: Sequence[str], rows: Sequence[Sequence[str]]) -> None:
+    """Print a table: the first column left-aligned, the others right-aligned."""
+    out = Table(title=title)
+    for k, column in enumerate(columns):
+        out.add_column(column, justify="left" if k == 0 else "right")
+    for row in rows:
+        out.add_row(*row)
+    Console().print(out)
+
+
+def fault_text(code: float) -> str:
+    """A latched fault code as ``NAME (meaning)``; ``none`` when nothing tripped."""
+    from anklelab.control.safety import Fault
+
+    fault = Fault(int(code))
+    return "none" if fault is Fault.NONE else fault.describe()
+
+
+def fail_on_fault(command: str, code: float, what: str) -> None:
+    """After the results are printed: a run that latched a fault ends in one ``error:`` line."""
+    if code:
+        raise ParameterError(f"capstan {command}: {what} latched {fault_text(code)}")
