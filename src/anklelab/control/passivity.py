@@ -5,12 +5,13 @@ The rendered torque ``tau_k`` is held over each control period (zero-order hold)
 platform turns by ``delta_k`` relative to the equilibrium; the energy flowing *into* the virtual
 environment over that period is ``-tau_k delta_k``, known one tick later from the encoder. The
 observer sums it: ``E_k = sum -tau_j delta_j``. A passive environment (a spring stores,
-a damper dissipates) keeps ``E_k >= 0``; sampling, the hold and the velocity filter can make a
-stiff spring or a large damper generate energy, and then ``E_k`` turns negative. The controller
-adds, for the next period, the damping ``alpha = -E_k / (T w^2)`` (at most
-``max_damping``) that would dissipate the deficit at the present speed estimate ``w``, so that the
-rendering as seen by the foot never produces energy for long; the energy it dissipates is
-counted when the next increment arrives.
+a damper dissipates) keeps ``E_k >= 0``; sampling, the hold, the encoder's quantisation and the
+velocity filter can make a stiff spring or a large damper generate energy, and then ``E_k``
+turns negative. The controller adds, for the next period, the damping
+``alpha = -E_k / (T w^2)`` (at most ``max_damping``) that dissipates the deficit if the platform
+keeps the speed ``w = delta_k / T`` of the last period, so that the rendering as seen by the
+foot never produces energy for long; what it really dissipates is counted when the next
+increment arrives.
 """
 
 from __future__ import annotations
@@ -33,7 +34,6 @@ def passivity_update(
     state: NDArray[np.float64],
     torque: float,
     deflection: float,
-    speed: float,
     dt: float,
     max_damping: float,
     enabled: float,
@@ -48,8 +48,6 @@ def passivity_update(
         The virtual environment's torque for this tick, N·m.
     deflection : float
         Measured angle minus the equilibrium, rad.
-    speed : float
-        Speed estimate, rad/s.
     dt : float
         Control period, s.
     max_damping : float
@@ -64,8 +62,10 @@ def passivity_update(
     energy : float
         The observed energy, J (after this tick's increment).
     """
+    speed = 0.0
     if state[3] != 0.0:
         state[0] -= state[1] * (deflection - state[2])
+        speed = (deflection - state[2]) / dt
     state[3] = 1.0
     extra = 0.0
     if enabled != 0.0 and state[0] < 0.0 and speed != 0.0:

@@ -203,7 +203,6 @@ def closed_loop(  # type: ignore[no-untyped-def]
                 passivity,
                 rendered,
                 angle - row_in[REF],
-                speed,
                 dt,
                 env.max_passivity_damping,
                 env.passivity_control,
