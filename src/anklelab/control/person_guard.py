@@ -8,9 +8,11 @@ the controller's current request and
    alpha)``, to ``±torque_limit_nm``: the most the platform may push on the person;
 2. limits that torque's rate of change to ``jerk_limit_rad_s3`` times the platform's (and
    foot's) inertia: the angular jerk the motor may ask for;
-3. latches a fall when the disturbance observer's estimate of the human torque changes by more
-   than ``fall_torque_change_nm`` within ``fall_window_s`` (a standing person's load vanishing,
-   a stumble), or when a stop is requested (a harness or VR fall detector, an operator); it then
+3. latches a fall when the magnitude of the disturbance observer's estimate of the human
+   torque, averaged over the last ``fall_window_s``, has dropped by more than
+   ``fall_torque_change_nm`` below its average over the ``fall_baseline_s`` before (a standing
+   person's load vanishing; a terrain that tilts the foot loads the ankle more, not less), or
+   when a stop is requested (a harness or VR fall detector, an operator); it then
    brakes the platform like a damper (``brake_damping_nms_per_rad``, within the torque limit)
    for ``stop_time_s`` and cuts the current: the fall-safe stop (``Fault.FALL_STOP``).
 
@@ -40,21 +42,30 @@ class GuardConstants(NamedTuple):
     torque_step: float  # largest change of the torque per tick
     fall_change: float
     window_ticks: int
+    baseline_ticks: int
     brake_damping: float
     stop_ticks: int
     gravity_torque: float
     com_angle: float
     torque_per_amp: float
     enabled: float
+    detect_falls: float
 
 
 def guard_constants(
-    params: CapstanParameters, fs: float, *, foot_inertia_kgm2: float, enabled: bool = True
+    params: CapstanParameters,
+    fs: float,
+    *,
+    foot_inertia_kgm2: float,
+    enabled: bool = True,
+    detect_falls: bool = True,
 ) -> GuardConstants:
     """The guard's constants at the control rate ``fs`` (Hz) from ``params.person_safety``.
 
     ``foot_inertia_kgm2`` is the person's foot, added to the platform's inertia for the jerk
-    limit; ``enabled=False`` makes the guard pass every request unchanged (no person).
+    limit; ``enabled=False`` makes the guard pass every request unchanged (no person);
+    ``detect_falls=False`` leaves only the requested stop (a seated user cannot fall, and the
+    torque a rendered terrain puts on a relaxed ankle changes as fast as a fall's).
     """
     s, plat = params.person_safety, params.platform
     inertia = linear_platform(params).inertia_kgm2 + foot_inertia_kgm2
@@ -63,20 +74,23 @@ def guard_constants(
         torque_step=s.jerk_limit_rad_s3 * inertia / fs,
         fall_change=s.fall_torque_change_nm,
         window_ticks=max(1, round(s.fall_window_s * fs)),
+        baseline_ticks=max(1, round(s.fall_baseline_s * fs)),
         brake_damping=s.brake_damping_nms_per_rad,
         stop_ticks=max(1, round(s.stop_time_s * fs)),
         gravity_torque=plat.mass_kg * GRAVITY_M_S2 * plat.com_distance_m,
         com_angle=plat.com_angle_rad,
         torque_per_amp=params.motor.torque_constant_nm_per_a * params.total_ratio,
         enabled=1.0 if enabled else 0.0,
+        detect_falls=1.0 if detect_falls else 0.0,
     )
 
 
 @njit(cache=True)
-def new_guard_state(window_ticks: int) -> NDArray[np.float64]:
-    """Fresh state ``[latched, ticks since the stop, last torque, ring index, started, ring...]``
-    (the ring holds the last ``window_ticks`` torque estimates)."""
-    return np.zeros(5 + window_ticks)
+def new_guard_state(c: GuardConstants) -> NDArray[np.float64]:
+    """Fresh state ``[latched, ticks since the stop, last torque, ring index, samples seen,
+    window sum, baseline sum, ring...]``; the ring holds the last ``window_ticks +
+    baseline_ticks`` torque estimates."""
+    return np.zeros(7 + c.window_ticks + c.baseline_ticks)
 
 
 @njit(cache=True, inline="always")
@@ -115,14 +129,24 @@ def guard_update(
     """
     if c.enabled == 0.0:
         return request, 0.0
-    ring = state[5:]
+    ring = state[7:]
     index = int(state[3])
-    oldest = ring[index]  # the estimate window_ticks ago
+    size = ring.size
+    leaving_baseline = ring[index]  # the oldest estimate leaves the baseline ...
+    joining_baseline = ring[(index + c.baseline_ticks) % size]  # ... one leaves the window
     ring[index] = human_torque
-    state[3] = (index + 1) % ring.size
-    if state[4] < ring.size:  # the window is not full yet
+    state[3] = (index + 1) % size
+    state[5] += human_torque - (joining_baseline if state[4] >= c.window_ticks else 0.0)
+    state[6] += (joining_baseline if state[4] >= c.window_ticks else 0.0) - (
+        leaving_baseline if state[4] >= size else 0.0
+    )
+    if state[4] < size:  # the window and its baseline are not full yet
         state[4] += 1.0
-    elif state[0] == 0.0 and (stop != 0.0 or abs(human_torque - oldest) > c.fall_change):
+    elif state[0] == 0.0 and c.detect_falls != 0.0:
+        drop = abs(state[6] / c.baseline_ticks) - abs(state[5] / c.window_ticks)
+        if drop > c.fall_change:  # the load the person put on the platform is gone
+            state[0] = 1.0
+    if stop != 0.0:
         state[0] = 1.0
     if not math.isfinite(request):
         return request, 0.0

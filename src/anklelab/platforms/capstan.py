@@ -231,8 +231,9 @@ class PersonSafetyParameters(Parameters):
     jerk_limit_rad_s3 : float
         Largest angular jerk the motor torque may ask of the platform and foot (its rate is
         limited to this jerk times their inertia).
-    fall_torque_change_nm, fall_window_s : float
-        A change of the estimated human torque by more than this within the window is a fall.
+    fall_torque_change_nm, fall_window_s, fall_baseline_s : float
+        A fall: the estimated human torque averaged over the window departs by more than this
+        from its average over the baseline before the window.
     brake_damping_nms_per_rad, stop_time_s : float
         The fall-safe stop brakes like this damper for this long, then cuts the current.
     """
@@ -241,6 +242,7 @@ class PersonSafetyParameters(Parameters):
     jerk_limit_rad_s3: float = Positive
     fall_torque_change_nm: float = Positive
     fall_window_s: float = Positive
+    fall_baseline_s: float = Positive
     brake_damping_nms_per_rad: float = Positive
     stop_time_s: float = Positive
 

@@ -147,7 +147,7 @@ def closed_loop(  # type: ignore[no-untyped-def]
     safety_state = new_safety_state()
     virtual = new_admittance_state()
     passivity = new_passivity_state()
-    guard_state = new_guard_state(guard.window_ticks)
+    guard_state = new_guard_state(guard)
     person_state = new_person_state(x[3], person.delay_ticks)
     frozen = 0.0
     estimate = 0.0

@@ -160,6 +160,7 @@ def simulate_closed_loop(
         setup.fs,
         foot_inertia_kgm2=foot.foot_inertia_kgm2 if foot else 0.0,
         enabled=setup.guard and foot is not None,
+        detect_falls=setup.person is not None and setup.fall_detection,
     )
     out = closed_loop(
         twin.constants,

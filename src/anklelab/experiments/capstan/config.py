@@ -103,6 +103,11 @@ class CapstanSetup:
     guard : bool
         Run the person guard (torque and jerk limits, fall-safe stop) whenever someone is on
         the platform.
+    fall_detection : bool
+        With a standing or stepping person, the guard also detects a fall from the observer's
+        torque estimate (the load vanishing). A rendered terrain changes the ankle's torque as
+        fast as a fall does; scenes rely on the stop request (a fall detector of the VR system
+        or harness) instead.
     """
 
     params: CapstanParameters = field(default_factory=lambda: load_platform("capstan"))
@@ -123,6 +128,7 @@ class CapstanSetup:
     person: Activity | None = None
     human: PerturberatorParameters | None = None
     guard: bool = True
+    fall_detection: bool = True
 
     def __post_init__(self) -> None:
         if self.person is not None and self.person not in ACTIVITIES:

@@ -8,7 +8,8 @@ The person's torque on the platform (dorsiflexing positive) is, while the foot i
 - ``K(t)``, ``B(t)``: the twin's human ankle (``perturberator.toml [human]``, per kilogram, times
   ``[gait] body_mass_kg``): quiet standing takes the stiffness at
   ``person.standing_stiffness_time_s``; a step's stance follows the stiffness knots through
-  stance (held beyond the first and last knot);
+  stance (held beyond the first and last knot), weighted by how far the foot has loaded the
+  platform (the vertical force over its mid-stance level, at most 1);
 - ``theta_rest`` follows the platform angle with ``person.posture_time_constant_s``: the person
   re-aligns the shank to a slow tilt, while a fast one loads the ankle's stiffness;
 - ``L(t)``: the body weight on the platform times the centre of pressure's lever arm (anterior
@@ -179,12 +180,13 @@ def person_profile(
     )
     stance = stance_signals(trials, gait, t)
     contact = stance.contact.any(axis=0)
+    vertical = np.sum(stance.grf_z, axis=0)
     lever = np.sum(stance.progression, axis=0) - human.geometry.heel_to_ankle_m
-    load = -person.walking_load_fraction * np.sum(stance.grf_z, axis=0) * lever
-    since_contact = np.mod(t, cycle)
-    stiffness = np.interp(since_contact, knots, per_kg) * mass
-    on = contact.astype(float)
-    return PersonProfile(stiffness * on, damping * on, np.where(contact, load, 0.0), on)
+    load = -person.walking_load_fraction * vertical * lever
+    # the ankle's impedance reaches the platform as the foot loads it (no jump at toe-off)
+    loaded = np.clip(vertical / (gait.vertical_base_bw * mass * GRAVITY), 0.0, 1.0)
+    stiffness = np.interp(np.mod(t, cycle), knots, per_kg) * mass * loaded
+    return PersonProfile(stiffness, damping * loaded, load, contact.astype(float))
 
 
 @njit(cache=True)
