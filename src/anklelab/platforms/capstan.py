@@ -26,6 +26,7 @@ __all__ = [
     "PersonParameters",
     "PersonSafetyParameters",
     "SafetyParameters",
+    "TeleopParameters",
     "TiltPlatformParameters",
     "UserParameters",
     "WorkspaceParameters",
@@ -247,6 +248,30 @@ class PersonSafetyParameters(Parameters):
     stop_time_s: float = Positive
 
 
+class TeleopParameters(Parameters):
+    """Teleoperation: the remote robot's ankle joint, its ground, and the wave channel.
+
+    Attributes
+    ----------
+    remote_inertia_kgm2, remote_damping_nms_per_rad : float
+        The remote robot's foot-pitch joint.
+    remote_kp_nm_per_rad, remote_kd_nms_per_rad : float
+        Its local controller, which follows the velocity the channel asks for.
+    ground_stiffness_nm_per_rad, ground_damping_nms_per_rad : float
+        The remote foot's contact with the ground, about the ground's slope.
+    wave_impedance_nms_per_rad : float
+        The wave variables' characteristic impedance ``b``.
+    """
+
+    remote_inertia_kgm2: float = Positive
+    remote_damping_nms_per_rad: float = NonNegative
+    remote_kp_nm_per_rad: float = NonNegative
+    remote_kd_nms_per_rad: float = NonNegative
+    ground_stiffness_nm_per_rad: float = Positive
+    ground_damping_nms_per_rad: float = NonNegative
+    wave_impedance_nms_per_rad: float = Positive
+
+
 class CapstanParameters(Parameters):
     """Every parameter of the capstan ankle platform.
 
@@ -269,6 +294,7 @@ class CapstanParameters(Parameters):
     user: UserParameters
     person: PersonParameters
     person_safety: PersonSafetyParameters
+    teleop: TeleopParameters
 
     @property
     def total_ratio(self) -> float:

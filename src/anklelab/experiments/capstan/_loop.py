@@ -27,11 +27,14 @@ from anklelab.control.passivity import new_passivity_state, passivity_update
 from anklelab.control.person_guard import guard_update, new_guard_state
 from anklelab.control.pid import new_control_state, position_control_update
 from anklelab.control.safety import Fault, new_safety_state, safety_update
+from anklelab.control.teleop import bounded_receive, wave_master, wave_slave
 from anklelab.sim.capstan._jit import FAST
 from anklelab.sim.capstan.person import new_person_state, person_torque
 from anklelab.sim.capstan.plant import encoder_angle, plant_advance
+from anklelab.sim.capstan.remote import new_remote_state, remote_step
 
-MODES = {"position": 0, "admittance": 1, "impedance": 2}
+MODES = {"position": 0, "admittance": 1, "impedance": 2, "teleoperation": 3}
+SCHEMES = {"wave": 1, "direct": 0}
 FAULTS = {
     "none": 0,
     "encoder-nan": 1,
@@ -55,6 +58,7 @@ INPUTS = (
     "person_contact",
     "current_noise_a",
     "stop",  # nonzero: a fall-safe stop is requested
+    "remote_ground_rad",  # teleoperation: the remote ground's slope under the robot's foot
 )
 SIGNALS = (
     "reference_rad",
@@ -78,6 +82,9 @@ SIGNALS = (
     "person_torque_nm",
     "reflex_torque_nm",
     "guard_clamped",
+    "remote_angle_rad",
+    "remote_contact_nm",
+    "channel_energy_j",
     "fault",
 )
 (
@@ -95,6 +102,7 @@ SIGNALS = (
     P_CONTACT,
     NOISE,
     STOP,
+    GROUND,
 ) = range(len(INPUTS))
 FALL_STOP = float(Fault.FALL_STOP)
 
@@ -121,6 +129,10 @@ def closed_loop(  # type: ignore[no-untyped-def]
     env,
     guard,
     person,
+    remote,
+    scheme,
+    forward,
+    backward,
     limits,
     inputs,
     fault_kind,
@@ -135,6 +147,9 @@ def closed_loop(  # type: ignore[no-untyped-def]
     (:class:`FeedforwardConstants`) adds the inverse dynamics ``J a_ref + b_u w_ref + K_u
     theta_ref + F(w_ref)`` (the observer's model, the seated user's nominal foot and ankle) to
     the request, and in admittance rendering takes the estimated human torque off the loop.
+    In teleoperation, ``forward[k]`` and ``backward[k]`` are the newest packets received at tick
+    ``k`` by the remote robot and by the platform (-1: none yet; :func:`~anklelab.sim.capstan.
+    remote.arrivals`), ``remote`` the robot and ``scheme`` :data:`SCHEMES`.
     """
     n = inputs.shape[0]
     dt = step.h * step.n_sub
@@ -149,6 +164,12 @@ def closed_loop(  # type: ignore[no-untyped-def]
     passivity = new_passivity_state()
     guard_state = new_guard_state(guard)
     person_state = new_person_state(x[3], person.delay_ticks)
+    robot = new_remote_state()
+    sent_forward = np.zeros((n, 3))  # per packet: wave (or angle), speed, energy sent so far
+    sent_backward = np.zeros((n, 2))  # per packet: wave (or contact torque), energy so far
+    used_forward = 0.0
+    used_backward = 0.0
+    contact = 0.0
     frozen = 0.0
     estimate = 0.0
     previous = 0.0
@@ -208,6 +229,24 @@ def closed_loop(  # type: ignore[no-untyped-def]
                 env.passivity_control,
             )
             request += rendered / ctrl.torque_per_amp
+        elif mode == 3:
+            rendered, used_backward, used_forward, contact = _teleoperate(
+                remote,
+                scheme,
+                robot,
+                sent_forward,
+                sent_backward,
+                forward[k],
+                backward[k],
+                k,
+                angle,
+                speed,
+                row_in[GROUND],
+                used_forward,
+                used_backward,
+                dt,
+            )
+            request += rendered / ctrl.torque_per_amp
         enabled = row_in[ENABLED] != 0.0
         if not enabled:  # the drive's output stage is off: no current, no current noise
             request = 0.0
@@ -261,5 +300,60 @@ def closed_loop(  # type: ignore[no-untyped-def]
         row[18] = human
         row[19] = reflex
         row[20] = clamped
-        row[21] = fault
+        row[21] = robot[0]
+        row[22] = contact
+        row[23] = sent_forward[k, 2] + sent_backward[k, 1] - used_forward - used_backward
+        row[24] = fault
     return out
+
+
+@njit(cache=True, fastmath=FAST, error_model="numpy", inline="always")
+def _teleoperate(  # type: ignore[no-untyped-def]
+    remote,
+    scheme,
+    robot,
+    sent_forward,
+    sent_backward,
+    newest_forward,
+    newest_backward,
+    k,
+    angle,
+    speed,
+    ground,
+    used_forward,
+    used_backward,
+    dt,
+):
+    """One tick of both ends of the channel: the torque for the platform to display, the
+    energies let out so far by each receiver, and the ground's torque on the remote foot."""
+    before = sent_forward[k - 1, 2] if k > 0 else 0.0
+    before_back = sent_backward[k - 1, 1] if k > 0 else 0.0
+    if scheme == 1:  # wave variables, each receiver bounded by the energy sent
+        returned = 0.0
+        if newest_backward >= 0:
+            packet = sent_backward[newest_backward]
+            returned = bounded_receive(packet[0], packet[1], used_backward, dt)
+        used_backward += 0.5 * returned * returned * dt
+        force, wave = wave_master(remote.wave_impedance, speed, returned)
+        sent_forward[k, 0], sent_forward[k, 1] = wave, speed
+        sent_forward[k, 2] = before + 0.5 * wave * wave * dt
+        arrived = 0.0
+        if newest_forward >= 0:
+            packet = sent_forward[newest_forward]
+            arrived = bounded_receive(packet[0], packet[2], used_forward, dt)
+        used_forward += 0.5 * arrived * arrived * dt
+        w_sd, _, back = wave_slave(remote, robot[0], robot[1], robot[2], arrived, dt)
+        _, contact = remote_step(remote, robot, w_sd, ground, dt)
+        sent_backward[k, 0] = back
+        sent_backward[k, 1] = before_back + 0.5 * back * back * dt
+        return -force, used_backward, used_forward, contact
+    # direct: positions forward, the ground's torque back, no passivity
+    sent_forward[k, 0], sent_forward[k, 1] = angle, speed
+    target, target_speed = 0.0, 0.0
+    if newest_forward >= 0:
+        target, target_speed = sent_forward[newest_forward, 0], sent_forward[newest_forward, 1]
+    robot[2] = target - dt * target_speed  # the joint's controller follows the sent angle
+    _, contact = remote_step(remote, robot, target_speed, ground, dt)
+    sent_backward[k, 0] = contact
+    torque = sent_backward[newest_backward, 0] if newest_backward >= 0 else 0.0
+    return torque, used_backward, used_forward, contact

@@ -21,13 +21,21 @@ from anklelab.experiments.capstan._loop import (
     FAULTS,
     INPUTS,
     MODES,
+    SCHEMES,
     SIGNALS,
     FeedforwardConstants,
     closed_loop,
 )
-from anklelab.experiments.capstan.config import CapstanSetup, FaultInjection, Mode
+from anklelab.experiments.capstan.config import (
+    PERSON_FALLS,
+    CapstanSetup,
+    Channel,
+    FaultInjection,
+    Mode,
+)
 from anklelab.sim.capstan import SimulationResult
 from anklelab.sim.capstan.person import person_constants, person_profile
+from anklelab.sim.capstan.remote import arrivals, remote_constants
 
 __all__ = ["simulate_closed_loop"]
 
@@ -47,6 +55,8 @@ def simulate_closed_loop(
     damping: ArrayLike | None = None,
     enabled: ArrayLike | None = None,
     stop: ArrayLike | None = None,
+    remote_ground: ArrayLike | None = None,
+    channel: Channel | None = None,
     fault: FaultInjection | None = None,
     angle0: float = 0.0,
     seed: int | np.random.Generator = 0,
@@ -59,11 +69,12 @@ def simulate_closed_loop(
         Plant, controller, person and options.
     n_samples : int
         Number of control ticks (duration ``n_samples / setup.fs``).
-    mode : {"position", "admittance", "impedance", "open-loop"}
+    mode : {"position", "admittance", "impedance", "teleoperation", "open-loop"}
         ``position``: track ``reference`` (rad) with its speed and acceleration (for the
         derivative term and the feed-forward); ``admittance``/``impedance``: render
         ``environment`` (or the per-tick ``stiffness``/``damping``) about the equilibrium angle
-        ``reference``; ``open-loop``: apply ``command`` (A) alone.
+        ``reference``; ``teleoperation``: display the remote robot over ``channel``;
+        ``open-loop``: apply ``command`` (A) alone.
     reference, reference_speed, reference_acceleration : array_like, shape (n_samples,), optional
         Defaults: zeros. A non-finite reference makes a non-finite command, which the safety
         monitor latches as ``COMMAND_NAN``.
@@ -80,6 +91,10 @@ def simulate_closed_loop(
         False switches the drive's output stage off for that tick (default: on throughout).
     stop : array_like of bool, shape (n_samples,), optional
         True requests the fall-safe stop (a fall detector, an operator).
+    remote_ground : array_like, shape (n_samples,), optional
+        Teleoperation: the slope of the ground under the remote robot's foot, rad.
+    channel : Channel, optional
+        Teleoperation: the network (default: wave variables, no delay).
     fault : FaultInjection, optional
         Sensor fault to inject.
     angle0 : float
@@ -96,6 +111,8 @@ def simulate_closed_loop(
         raise ParameterError(f"mode must be one of {[*MODES, 'open-loop']}; got {mode!r}")
     if mode in ("admittance", "impedance") and environment is None:
         raise ParameterError(f"mode {mode!r} needs an environment")
+    if fault is not None and fault.kind == PERSON_FALLS and setup.person is None:
+        raise ParameterError("fault 'person-falls' needs a standing or stepping person")
     if not (isinstance(n_samples, int | np.integer) and n_samples > 0):
         raise ParameterError(f"n_samples must be a positive integer; got {n_samples!r}")
     params = setup.params
@@ -122,6 +139,7 @@ def simulate_closed_loop(
     put("enabled", "enabled", enabled, 1.0)
     put("voluntary_torque_nm", "voluntary", voluntary)
     put("stop", "stop", stop)
+    put("remote_ground_rad", "remote_ground", remote_ground)
     if mode == "impedance" and not np.all(np.isfinite(table[:, column["stiffness_nm_per_rad"]])):
         raise ParameterError("impedance rendering needs a finite stiffness (inf is rigid ground)")
     # single-precision draws are plenty for sensor noise and twice as fast
@@ -135,10 +153,19 @@ def simulate_closed_loop(
         table[:, column["person_damping_nms_per_rad"]] = profile.damping_nms_per_rad
         table[:, column["person_load_nm"]] = profile.load_torque_nm
         table[:, column["person_contact"]] = profile.contact
+        if fault is not None and fault.kind == PERSON_FALLS:
+            gone = np.arange(n_samples) >= round(fault.time_s * setup.fs)
+            for name in ("stiffness_nm_per_rad", "damping_nms_per_rad", "load_nm", "contact"):
+                table[gone, column[f"person_{name}"]] = 0.0
+    # a person falling is not a sensor fault: the loop itself sees nothing of it
+    sensor = None if fault is None or fault.kind == PERSON_FALLS else fault
+    channel = Channel() if channel is None else channel
+    forward = arrivals(n_samples, setup.fs, channel.delay_s, channel.jitter_s, seed=rng)
+    backward = arrivals(n_samples, setup.fs, channel.delay_s, channel.jitter_s, seed=rng)
 
     twin = setup.twin()
     gains = setup.resolved_gains()
-    passive = mode in ("impedance", "open-loop")
+    passive = mode in ("impedance", "teleoperation", "open-loop")
     if passive:
         gains = gains.replace({"kp_nm_per_rad": 0.0, "ki_nm_per_rad_s": 0.0, "kd_nms_per_rad": 0.0})
     ctrl = control_constants(
@@ -178,11 +205,15 @@ def simulate_closed_loop(
         env.constants(lag=lag, passivity_control=setup.passivity_control),
         guard,
         person_constants(params, setup.fs),
+        remote_constants(params.teleop),
+        SCHEMES[channel.scheme],
+        forward,
+        backward,
         setup.safety_limits().to_array(),
         table,
-        FAULTS[fault.kind] if fault else 0,
-        round(fault.time_s * setup.fs) if fault else 0,
-        fault.value if fault else 0.0,
+        FAULTS[sensor.kind] if sensor else 0,
+        round(sensor.time_s * setup.fs) if sensor else 0,
+        sensor.value if sensor else 0.0,
         twin.stepping(setup.fs),
         params.encoder.resolution_rad,
     )

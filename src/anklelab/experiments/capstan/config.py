@@ -8,6 +8,7 @@ sensor fault to inject into a run.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 from typing import Literal
 
@@ -21,9 +22,38 @@ from anklelab.platforms.perturberator import PerturberatorParameters
 from anklelab.sim.capstan import CapstanTwin
 from anklelab.sim.capstan.person import ACTIVITIES, Activity, person_foot
 
-__all__ = ["CapstanSetup", "FaultInjection", "Mode"]
+__all__ = ["CapstanSetup", "Channel", "FaultInjection", "Mode"]
 
-Mode = Literal["position", "admittance", "impedance", "open-loop"]
+PERSON_FALLS = "person-falls"
+Mode = Literal["position", "admittance", "impedance", "teleoperation", "open-loop"]
+
+
+@dataclass(frozen=True)
+class Channel:
+    """The network between the platform and the remote robot in teleoperation.
+
+    Attributes
+    ----------
+    scheme : {"wave", "direct"}
+        ``wave``: wave variables with energy-bounded receivers (passive for any delay);
+        ``direct``: the platform's angle forward, the remote ground's torque back (not passive).
+    delay_s : float
+        One-way delay, s.
+    jitter_s : float
+        Each packet is further delayed by a uniform random time in ``[0, jitter_s]``.
+    """
+
+    scheme: Literal["wave", "direct"] = "wave"
+    delay_s: float = 0.0
+    jitter_s: float = 0.0
+
+    def __post_init__(self) -> None:
+        if self.scheme not in ("wave", "direct"):
+            raise ParameterError(f"scheme must be 'wave' or 'direct'; got {self.scheme!r}")
+        if not (0 <= self.delay_s <= 2.0 and 0 <= self.jitter_s <= 2.0):
+            raise ParameterError(
+                f"delay and jitter must lie in [0, 2] s; got {self.delay_s}, {self.jitter_s}"
+            )
 
 
 @dataclass(frozen=True)
@@ -34,8 +64,9 @@ class FaultInjection:
     ----------
     kind : str
         ``encoder-nan``, ``encoder-stale`` (reading and sample counter freeze),
-        ``encoder-jump`` (``value`` rad added), ``encoder-reversed`` (counts run backwards) or
-        ``current-nan``.
+        ``encoder-jump`` (``value`` rad added), ``encoder-reversed`` (counts run backwards),
+        ``current-nan``, or ``person-falls`` (the standing or stepping person's load, impedance
+        and reflex vanish: they fall off the platform).
     time_s : float
         Onset, s.
     value : float
@@ -47,9 +78,13 @@ class FaultInjection:
     value: float = 0.0
 
     def __post_init__(self) -> None:
-        if self.kind not in FAULTS or self.kind == "none":
+        kinds = sorted([*set(FAULTS) - {"none"}, PERSON_FALLS])
+        if self.kind not in kinds:
+            raise ParameterError(f"fault kind must be one of {kinds}; got {self.kind!r}")
+        if not (math.isfinite(self.time_s) and self.time_s >= 0 and math.isfinite(self.value)):
             raise ParameterError(
-                f"fault kind must be one of {sorted(set(FAULTS) - {'none'})}; got {self.kind!r}"
+                f"fault time must be finite and >= 0 s and its value finite; got "
+                f"{self.time_s}, {self.value}"
             )
 
 
