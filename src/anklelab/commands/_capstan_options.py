@@ -14,7 +14,7 @@ import math
 import typing
 from collections.abc import Callable, Iterable, Sequence
 from dataclasses import asdict, dataclass, field
-from enum import Enum
+from enum import Enum, StrEnum
 from pathlib import Path
 from typing import Annotated, Any
 
@@ -40,7 +40,7 @@ class OneLineErrors(TyperGroup):
             raise ParameterError(f"{where}: {exc.format_message()}") from None
 
 
-class Person(str, Enum):
+class Person(StrEnum):
     """Who stands on the platform."""
 
     none = "none"
@@ -50,10 +50,14 @@ class Person(str, Enum):
 
 
 def number(
-    *, low: float | None = None, high: float | None = None, strict: bool = False
+    *,
+    low: float | None = None,
+    high: float | None = None,
+    strict: bool = False,
+    infinite: bool = False,
 ) -> Callable[[Any, Any, float], float]:
     """An option callback accepting only finite numbers within ``[low, high]`` (``strict``:
-    ``(low, high]``)."""
+    ``(low, high]``); ``infinite`` also accepts ``inf``."""
 
     def check(ctx: Any, param: Any, value: float) -> float:
         name = "/".join(param.opts) if param is not None else "value"
@@ -62,8 +66,9 @@ def number(
             bounds.append(f"{'>' if strict else '>='} {low:g}")
         if high is not None:
             bounds.append(f"<= {high:g}")
-        wanted = f"a finite number {' and '.join(bounds)}" if bounds else "a finite number"
-        bad = not math.isfinite(value)
+        kind = "a number (or inf)" if infinite else "a finite number"
+        wanted = f"{kind} {' and '.join(bounds)}" if bounds else kind
+        bad = math.isnan(value) or (math.isinf(value) and not (infinite and value > 0))
         bad |= low is not None and (value <= low if strict else value < low)
         bad |= high is not None and value > high
         if bad:
@@ -71,6 +76,26 @@ def number(
         return value
 
     return check
+
+
+def numbers(text: str, option: str, *, low: float, high: float, finite: bool = True) -> list[float]:
+    """Comma-separated numbers of an option, each within ``[low, high]``; with
+    ``finite=False`` NaN and infinities pass (they are for the safety monitor to refuse)."""
+    values = []
+    for item in text.split(","):
+        try:
+            value = float(item)
+        except ValueError:
+            raise ParameterError(
+                f"{option}: {item.strip()!r} is not a number; expected comma-separated numbers"
+            ) from None
+        out_of_range = math.isfinite(value) and not low <= value <= high
+        if out_of_range or (finite and not math.isfinite(value)):
+            raise ParameterError(
+                f"{option}: expected numbers in [{low:g}, {high:g}]; got {item.strip()}"
+            )
+        values.append(value)
+    return values
 
 
 def input_file(path: Path | None, what: str) -> Path | None:
@@ -274,11 +299,12 @@ _SHARED: tuple[tuple[str, Any, Any], ...] = (
 
 
 def with_setup_options(
-    **defaults: Any,
+    *, exclude: tuple[str, ...] = (), **defaults: Any
 ) -> Callable[[Callable[..., None]], Callable[..., None]]:
     """Give a command the shared options; it receives them as ``options: SetupOptions``.
 
-    ``defaults`` change a shared option's default for this command (``settling_time=0.15``).
+    ``defaults`` change a shared option's default for this command; ``exclude`` leaves some
+    out (the command then gets their default, e.g. the scene file names its person).
     """
 
     def decorate(command: Callable[..., None]) -> Callable[..., None]:
@@ -326,14 +352,24 @@ def table(title: str, columns: Sequence[str], rows: Sequence[Sequence[str]]) -> 
 
 
 def fault_text(code: float) -> str:
-    """A latched fault code as ``NAME (meaning)``; ``none`` when nothing tripped."""
+    """A latched fault code as its name (``none`` when nothing tripped); tables list the
+    meanings below them (:func:`explain_faults`)."""
     from anklelab.control.safety import Fault
 
-    fault = Fault(int(code))
-    return "none" if fault is Fault.NONE else fault.describe()
+    return "none" if int(code) == 0 else Fault(int(code)).name
+
+
+def explain_faults(codes: Iterable[float]) -> None:
+    """Print one line per fault that tripped: its name and what it means."""
+    from anklelab.control.safety import Fault
+
+    for code in sorted({int(c) for c in codes if c}):
+        Console().print(Fault(code).describe())
 
 
 def fail_on_fault(command: str, code: float, what: str) -> None:
     """After the results are printed: a run that latched a fault ends in one ``error:`` line."""
+    from anklelab.control.safety import Fault
+
     if code:
-        raise ParameterError(f"capstan {command}: {what} latched {fault_text(code)}")
+        raise ParameterError(f"capstan {command}: {what} latched {Fault(int(code)).describe()}")

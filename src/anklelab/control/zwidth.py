@@ -23,6 +23,7 @@ the step), while the platform dissipates at least ``b d^2 / T`` (viscous) and ``
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass
 
@@ -75,6 +76,8 @@ class ZWidthBoundary:
         ``g`` of the virtual damper.
     platform_damping_nms_per_rad, ankle_damping_nms_per_rad, coulomb_nm, count_rad : float
         The inputs: ``b``, ``b_h``, ``f_c`` (the smaller direction's) and ``q`` at the platform.
+    fs : float
+        Control rate, Hz.
     """
 
     damping_nms_per_rad: NDArray[np.float64]
@@ -85,6 +88,13 @@ class ZWidthBoundary:
     ankle_damping_nms_per_rad: float
     coulomb_nm: float
     count_rad: float
+    fs: float
+
+    def viscous_at(self, damping_nms_per_rad: ArrayLike) -> NDArray[np.float64]:
+        """The sampled-viscous boundary at any virtual damping, N·m/rad (0 where none)."""
+        b = np.asarray(damping_nms_per_rad, dtype=float)
+        total = self.platform_damping_nms_per_rad + self.ankle_damping_nms_per_rad
+        return np.maximum(2.0 * self.fs * (total - self.leak * b), 0.0)
 
     @property
     def stiffness_nm_per_rad(self) -> NDArray[np.float64]:
@@ -137,14 +147,15 @@ def zwidth_boundary(
     f = params.friction
     coulomb = min(f.coulomb_cw_nm, f.coulomb_ccw_nm) * params.capstan.ratio
     count = params.encoder.resolution_rad / params.total_ratio
-    viscous = np.maximum(2.0 * fs * (b + b_h - leak * b_virtual), 0.0)
-    return ZWidthBoundary(
+    boundary = ZWidthBoundary(
         damping_nms_per_rad=b_virtual,
-        viscous_nm_per_rad=viscous,
+        viscous_nm_per_rad=np.zeros_like(b_virtual),
         quantization_nm_per_rad=coulomb / count,
         leak=leak,
         platform_damping_nms_per_rad=b,
         ankle_damping_nms_per_rad=float(b_h),
         coulomb_nm=coulomb,
         count_rad=count,
+        fs=fs,
     )
+    return dataclasses.replace(boundary, viscous_nm_per_rad=boundary.viscous_at(b_virtual))

@@ -8,10 +8,14 @@ from anklelab.report.comparisons import Comparison
 from anklelab.report.demo import write_demo_report
 from anklelab.report.figures_capstan import (
     chirp_tracking_figure,
+    envelope_figure,
     friction_figures,
     observer_figure,
     render_figure,
+    scene_figure,
     step_figure,
+    teleop_figure,
+    zwidth_figure,
 )
 from anklelab.report.figures_walking import (
     filters_figure,
@@ -34,6 +38,7 @@ __all__ = [
     "Section",
     "Table",
     "chirp_tracking_figure",
+    "envelope_figure",
     "figure_png",
     "filters_figure",
     "friction_figures",
@@ -43,10 +48,13 @@ __all__ = [
     "render_html",
     "results_report",
     "save_walking_figures",
+    "scene_figure",
     "stance_figure",
     "step_figure",
     "stiffness_figure",
+    "teleop_figure",
     "walking_figures",
     "write_demo_report",
     "write_report",
+    "zwidth_figure",
 ]

@@ -33,7 +33,8 @@ class RenderMetrics:
     stiffness_nm_per_rad, damping_nms_per_rad, inertia_kgm2 : float
         Felt impedance.
     stiffness_error_percent, damping_error_percent : float
-        Relative to the rendered environment's.
+        Relative to the rendered environment's (NaN for a commanded 0, or an infinite, rigid
+        stiffness: then the fit gives the stiffness of the position loop and the cable).
     equilibrium_rms_error_rad : float
         RMS of ``theta - theta_eq``.
     """
@@ -84,6 +85,13 @@ def render(
     return result, render_metrics(result, equilibrium, environment)
 
 
+def _percent(felt: float, commanded: float) -> float:
+    """Relative error, %; NaN where the commanded value is 0 or infinite (rigid)."""
+    if commanded == 0 or not math.isfinite(commanded):
+        return math.nan
+    return float(100 * (felt - commanded) / commanded)
+
+
 def render_metrics(
     result: SimulationResult,
     equilibrium: ArrayLike,
@@ -117,7 +125,7 @@ def render_metrics(
         stiffness_nm_per_rad=float(stiffness),
         damping_nms_per_rad=float(damping),
         inertia_kgm2=float(inertia),
-        stiffness_error_percent=float(100 * (stiffness - k_env) / k_env) if k_env else math.nan,
-        damping_error_percent=float(100 * (damping - b_env) / b_env) if b_env else math.nan,
+        stiffness_error_percent=_percent(stiffness, k_env),
+        damping_error_percent=_percent(damping, b_env),
         equilibrium_rms_error_rad=float(np.sqrt(np.mean(deflection**2))),
     )

@@ -23,6 +23,7 @@ the foot felt (least squares of the interaction torque on the deflection and its
 from __future__ import annotations
 
 import dataclasses
+import itertools
 import math
 from dataclasses import dataclass
 
@@ -110,7 +111,7 @@ def fit_bumps_to_envelope(
     edges.append(fs / 2 + 1.0)
     scaled = np.zeros_like(spectrum)
     scales: dict[str, float] = {}
-    for lo, hi in zip(edges[:-1], edges[1:], strict=True):
+    for lo, hi in itertools.pairwise(edges):
         band = (f >= lo) & (f < hi)
         if not band.any():
             continue
