@@ -238,29 +238,29 @@ def envelope_figure(
     f = envelope.frequency_hz
     fig, ax = plt.subplots(figsize=(9, 5), layout="constrained")
     names = {
-        "workspace": "workspace",
+        "workspace": "workspace limit",
         "speed": "speed limit",
-        "torque": "torque",
-        "voltage": "supply voltage",
+        "torque": "torque limit",
+        "voltage": "supply-voltage limit",
     }
     for key, label in names.items():
-        ax.loglog(f, np.degrees(envelope.bounds[key]), ":", lw=1, label=f"{label} limit")
+        ax.loglog(f, np.degrees(envelope.bounds[key]), ":", lw=1, label=label)
     ax.loglog(f, np.degrees(envelope.amplitude_rad), "k-", lw=2, label="envelope (model)")
     if check is not None:
         ax.loglog(
             f, np.degrees(check.simulated_rad), "o", ms=5, mfc="none", label="found on the twin"
         )
-    terrain_f, terrain_deg = _terrain_slope_spectrum(f)
+    terrain_f, terrain_deg = _terrain_slope_spectrum(np.geomspace(f.min(), f.max(), 200))
     ax.loglog(terrain_f, terrain_deg, "-", color="tab:green", lw=1.5, label="terrain slope (1 m/s)")
     ax.loglog(*PAPER_POINT, "r*", ms=12, label="paper 001: 5 deg at 3 Hz")
     if math.isfinite(envelope.fidelity_hz) and envelope.fidelity_hz < f.max():
         ax.axvline(envelope.fidelity_hz, color="0.5", ls="--", lw=0.8, label="loop bandwidth")
     ax.set_xlabel("frequency (Hz)")
     ax.set_ylabel("amplitude (deg)")
-    lows = [np.degrees(envelope.amplitude_rad).min() / 3, terrain_deg.min()]
-    ax.set_ylim(max(min(lows), 1e-3), 200)
+    bottom = max(np.degrees(envelope.amplitude_rad).min() / 5, 1e-3)
+    ax.set_ylim(bottom, 200)
     _plain_log(ax.xaxis, _ticks(f.min(), f.max()))
-    _plain_log(ax.yaxis, _ticks(max(min(lows), 1e-3), 200))
+    _plain_log(ax.yaxis, _ticks(bottom, 200))
     ax.set_title("display envelope: the largest sinusoid the platform renders")
     _legend_outside(ax)
     return _save(fig, path)
@@ -273,7 +273,7 @@ def _terrain_slope_spectrum(f: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     speed, foot = 1.0, 0.25
     n = f / speed
     slope_psd = (2 * np.pi) ** 2 * 64e-6 * 0.1**2  # (rad^2) per (cycle/m)
-    foot_filter = np.abs(np.sinc(n * foot))
+    foot_filter = np.minimum(1.0, 1.0 / (np.pi * n * foot))  # the foot's averaging, enveloped
     octave = n / np.sqrt(2)  # bandwidth of an octave around n
     amplitude = np.sqrt(2 * slope_psd * octave) * foot_filter
     return f, np.degrees(amplitude)

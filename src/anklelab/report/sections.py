@@ -19,6 +19,7 @@ from typing import Any
 from anklelab._version import __version__
 from anklelab.errors import ResultsFormatError
 from anklelab.report.html import Figure, Section, Table, write_report
+from anklelab.report.sections_capstan import capstan_sections
 
 __all__ = [
     "FRICTION_FIGURES",
@@ -67,8 +68,8 @@ FRICTION_FIGURES: tuple[FigureSpec, ...] = (
     (
         "spindown_fit",
         "Spin-down fits",
-        "Pinion speed after the torque cut (dots) and the exact solution of "
-        "J ω' + b ω = -T_c sign(ω) fitted per direction (paper 001, Fig. 6).",
+        "Pinion speed after the torque cut (thin lines, one per run) and the exact solution of "
+        "J ω' + b ω = -T_c sign(ω) fitted per direction (dashed; paper 001, Fig. 6).",
     ),
     (
         "chirp_fit",
@@ -303,8 +304,8 @@ def results_report(directory: str | Path, out: str | Path | None = None) -> tupl
     Parameters
     ----------
     directory : str or Path
-        Written by ``anklelab analyze`` (``results.json``) and/or ``anklelab identify friction``
-        (``friction.json``).
+        Written by ``anklelab analyze`` (``results.json``), ``anklelab identify friction``
+        (``friction.json``) and/or ``anklelab capstan`` commands (``steps.json``, ...).
     out : str or Path, optional
         The HTML file (default ``DIRECTORY/report.html``).
 
@@ -333,6 +334,9 @@ def results_report(directory: str | Path, out: str | Path | None = None) -> tupl
         document = load_results(friction, ("inertia_kgm2", "coulomb_nm", "viscous_nms_per_rad"))
         sections.append(friction_section(document, directory))
         missing += missing_figures(directory, FRICTION_FIGURES)
+    capstan, capstan_missing = capstan_sections(directory)
+    sections += capstan
+    missing += capstan_missing
     if not sections:
         nested = sorted(
             str(path.parent.relative_to(directory))
@@ -346,9 +350,9 @@ def results_report(directory: str | Path, out: str | Path | None = None) -> tupl
         )
         hint = f"; found result files in: {', '.join(nested)}" if nested else ""
         raise ResultsFormatError(
-            f"{directory}: no results.json (written by `anklelab analyze`) or friction.json "
-            f"(written by `anklelab identify friction`); expected an analysis output directory"
-            f"{hint}"
+            f"{directory}: no results.json (written by `anklelab analyze`), friction.json "
+            f"(written by `anklelab identify friction`) or result of an `anklelab capstan` "
+            f"command; expected an analysis output directory{hint}"
         )
     out = directory / "report.html" if out is None else Path(out)
     metadata = {"anklelab version": __version__, "results directory": directory.resolve()}
