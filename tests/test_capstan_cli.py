@@ -1,43 +1,76 @@
-"""The `anklelab capstan` commands run end to end and write their results."""
+"""The `anklelab capstan` commands run end to end, write their results, refuse to replace them
+without --force, and turn bad input into one error line."""
 
 import json
+import sys
 
-from typer.testing import CliRunner
+import pytest
 
-from anklelab.cli import app
+from anklelab.cli import run
 
-runner = CliRunner()
-
-
-def invoke(*args):
-    result = runner.invoke(app, ["capstan", *args])
-    assert result.exit_code == 0, result.output
-    return result.output
+SCENES = __import__("pathlib").Path(__file__).resolve().parents[1] / "examples" / "scenes"
 
 
-def test_tune_prints_gains_and_poles(tmp_path):
-    out = invoke("tune", "--settling-time", "0.25", "--out", str(tmp_path))
-    assert "Kp (N·m/rad)" in out and "closed-loop poles" in out
-    gains = json.loads((tmp_path / "gains.json").read_text())
-    assert gains["kp_nm_per_rad"] > 0
+def anklelab(args, monkeypatch, capsys):
+    """Run the entry point in-process: (exit code, stdout, stderr)."""
+    monkeypatch.setattr(sys, "argv", ["anklelab", *args])
+    capsys.readouterr()
+    try:
+        run()
+        code = 0
+    except SystemExit as exit:
+        code = exit.code if isinstance(exit.code, int) else 1
+    out = capsys.readouterr()
+    return code, out.out, out.err
 
 
-def test_step_and_chirp_write_results(tmp_path):
-    out = invoke("step", "--degrees", "5", "--hold", "0.6", "--out", str(tmp_path))
+@pytest.fixture
+def cli(monkeypatch, capsys):
+    return lambda *args: anklelab(["capstan", *args], monkeypatch, capsys)
+
+
+def test_tune_prints_gains_and_poles(cli, tmp_path):
+    code, out, _ = cli("tune", "--settling-time", "0.25", "--out", str(tmp_path))
+    assert code == 0 and "Kp (N·m/rad)" in out and "closed-loop poles" in out
+    document = json.loads((tmp_path / "gains.json").read_text())
+    assert document["results"]["kp_nm_per_rad"] > 0
+    assert document["command"] == "anklelab capstan tune" and document["anklelab_version"]
+
+
+def test_step_and_chirp_write_results_and_refuse_to_replace_them(cli, tmp_path):
+    code, out, err = cli("step", "--degrees", "5", "--hold", "0.6", "--out", str(tmp_path))
+    assert code == 0, err
     assert "5 deg" in out
-    assert json.loads((tmp_path / "steps.json").read_text())[0]["rise_time_s"] < 0.3
-    invoke("chirp", "--duration", "4", "--f1", "3", "--out", str(tmp_path))
+    steps = json.loads((tmp_path / "steps.json").read_text())["results"]
+    assert steps[0]["rise_time_s"] < 0.3 and steps[0]["fault"] == "none"
+    code, _, err = cli("step", "--degrees", "5", "--hold", "0.6", "--out", str(tmp_path))
+    assert code == 2 and "--force" in err and "steps.json" in err
+    code, _, err = cli(
+        "chirp", "--duration", "4", "--f1", "3", "--tracking", "feedforward", "--out", str(tmp_path)
+    )
+    assert code == 0, err
     chirp = json.loads((tmp_path / "chirp.json").read_text())
-    assert chirp["rms_error_rad"] > 0 and len(chirp["frequency_hz"]) > 5
+    assert chirp["settings"]["tracking"] == "feedforward" and chirp["results"]["rms_error_rad"] > 0
     assert (tmp_path / "steps.png").exists() and (tmp_path / "chirp.png").exists()
 
 
-def test_observer_and_render(tmp_path):
-    out = invoke("observe", "--task", "track", "--duration", "6", "--out", str(tmp_path))
-    assert "VAF" in out and (tmp_path / "observer_track.json").exists()
+@pytest.mark.parametrize("value", ["nan", "inf", "-inf"])
+def test_a_nonfinite_set_point_latches_command_nan_and_is_reported(cli, value):
+    code, out, err = cli("step", "--degrees", f"5,{value}", "--hold", "0.3")
+    assert code == 2
+    assert "COMMAND_NAN" in out and "settled" not in out
+    assert err.strip().splitlines() == [
+        "error: capstan step: a set-point latched COMMAND_NAN (the commanded output was NaN or "
+        "infinite)"
+    ]
+
+
+def test_observer_render_and_scene(cli, tmp_path):
+    code, out, err = cli("observe", "--task", "track", "--duration", "4", "--out", str(tmp_path))
+    assert code == 0 and "VAF" in out and (tmp_path / "observer_track.json").exists(), err
     terrain = tmp_path / "ramp.csv"
     terrain.write_text("distance_m,height_m\n0,0\n3,0\n6,0.5\n12,0.5\n")
-    out = invoke(
+    code, out, err = cli(
         "render",
         "--terrain",
         str(terrain),
@@ -48,15 +81,18 @@ def test_observer_and_render(tmp_path):
         "--out",
         str(tmp_path),
     )
-    assert "stiffness" in out and (tmp_path / "render.png").exists()
+    assert code == 0 and "stiffness" in out and (tmp_path / "render.png").exists(), err
+    code, out, err = cli("render", "--stiffness", "inf", "--duration", "6")
+    assert code == 0 and "rigid" in out and "nan" not in out, err
 
 
-def test_bad_mode_is_rejected():
-    result = runner.invoke(app, ["capstan", "render", "--mode", "teleport"])
-    assert result.exit_code != 0 and "admittance or impedance" in result.output
-
-
-def test_control_rate_outside_the_supported_range_is_a_usage_error():
-    result = runner.invoke(app, ["capstan", "step", "--fs", "50"])
-    assert result.exit_code == 2
-    assert "--fs" in result.output
+def test_usage_errors_are_one_line(cli):
+    for args, needle in [
+        (["render", "--mode", "teleport"], "--mode"),
+        (["step", "--sample-rate", "50"], "--sample-rate"),
+        (["observe", "--task", "juggle"], "--task"),
+        (["nosuch"], "No such command"),
+    ]:
+        code, _, err = cli(*args)
+        assert code == 2, args
+        assert len(err.strip().splitlines()) == 1 and err.startswith("error:") and needle in err

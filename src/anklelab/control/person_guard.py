@@ -43,6 +43,7 @@ class GuardConstants(NamedTuple):
     fall_change: float
     window_ticks: int
     baseline_ticks: int
+    still: float
     brake_damping: float
     stop_ticks: int
     gravity_torque: float
@@ -75,6 +76,7 @@ def guard_constants(
         fall_change=s.fall_torque_change_nm,
         window_ticks=max(1, round(s.fall_window_s * fs)),
         baseline_ticks=max(1, round(s.fall_baseline_s * fs)),
+        still=s.fall_still_rad,
         brake_damping=s.brake_damping_nms_per_rad,
         stop_ticks=max(1, round(s.stop_time_s * fs)),
         gravity_torque=plat.mass_kg * GRAVITY_M_S2 * plat.com_distance_m,
@@ -88,9 +90,9 @@ def guard_constants(
 @njit(cache=True)
 def new_guard_state(c: GuardConstants) -> NDArray[np.float64]:
     """Fresh state ``[latched, ticks since the stop, last torque, ring index, samples seen,
-    window sum, baseline sum, ring...]``; the ring holds the last ``window_ticks +
-    baseline_ticks`` torque estimates."""
-    return np.zeros(7 + c.window_ticks + c.baseline_ticks)
+    window sum, baseline sum, torque ring..., angle ring...]``; the rings hold the last
+    ``window_ticks + baseline_ticks`` torque estimates and angles."""
+    return np.zeros(7 + 2 * (c.window_ticks + c.baseline_ticks))
 
 
 @njit(cache=True, inline="always")
@@ -129,9 +131,12 @@ def guard_update(
     """
     if c.enabled == 0.0:
         return request, 0.0
-    ring = state[7:]
+    size = c.window_ticks + c.baseline_ticks
+    ring = state[7 : 7 + size]
+    angles = state[7 + size :]
     index = int(state[3])
-    size = ring.size
+    angle_then = angles[index]  # the angle size ticks ago
+    angles[index] = angle
     leaving_baseline = ring[index]  # the oldest estimate leaves the baseline ...
     joining_baseline = ring[(index + c.baseline_ticks) % size]  # ... one leaves the window
     ring[index] = human_torque
@@ -144,7 +149,8 @@ def guard_update(
         state[4] += 1.0
     elif state[0] == 0.0 and c.detect_falls != 0.0:
         drop = abs(state[6] / c.baseline_ticks) - abs(state[5] / c.window_ticks)
-        if drop > c.fall_change:  # the load the person put on the platform is gone
+        still = abs(angle - angle_then) < c.still
+        if drop > c.fall_change and still:  # the person's load is gone, not moved away
             state[0] = 1.0
     if stop != 0.0:
         state[0] = 1.0

@@ -27,6 +27,7 @@ integrated back to angle (exactly the encoder's, when the velocity column is its
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -99,6 +100,21 @@ def _coast(
     if stop - start < 5 or sign == 0.0:
         return None
     return _Coast(run, sign, cut, start, stop)
+
+
+def _check_signs(data: IdentData) -> None:
+    """While the torque drives a spin-down run, the shaft must turn the way it pushes."""
+    for run in data.spindown:
+        driven = (np.abs(run.torque_nm) > 0) & (np.abs(run.velocity_rad_s) > 0)
+        if driven.sum() < 10:
+            continue
+        agree = np.mean(np.sign(run.torque_nm[driven]) == np.sign(run.velocity_rad_s[driven]))
+        if agree < 0.5:
+            raise SessionFormatError(
+                f"spindown/{run.name}: the velocity runs against the driving torque in "
+                f"{100 * (1 - agree):.0f} % of the driven samples; expected positive torque to "
+                "turn the shaft clockwise (positive velocity): is a sign flipped?"
+            )
 
 
 def _coast_model(
@@ -229,8 +245,16 @@ class FrictionIdentifier:
                 )
 
     def fit(self, data: IdentData) -> FrictionIdentifier:
-        """Fit every parameter from an identification session (see the module docstring)."""
+        """Fit every parameter from an identification session (see the module docstring).
+
+        Raises
+        ------
+        SessionFormatError
+            The data cannot be a spin-down and chirp of one shaft: the velocity runs against
+            the torque that drives it (a flipped sign), or the fit finds no positive inertia.
+        """
         self._check()
+        _check_signs(data)
         fs = data.sample_rate_hz
         min_speed = self.min_speed_rad_s
         for _ in range(2):  # once more if the Stribeck velocity reaches into the fitted coasts
@@ -353,6 +377,12 @@ class FrictionIdentifier:
                 f"{self.chirp_min_speed_rad_s:g} rad/s; expected a chirp that keeps it moving"
             )
         inertia = float(np.dot(y, x) / np.dot(x, x))
+        if not (math.isfinite(inertia) and inertia > 0):
+            raise SessionFormatError(
+                f"chirp: the torque and the speed change disagree (fitted inertia {inertia:.3g} "
+                "kg·m²); expected positive torque to speed the shaft up clockwise (positive "
+                "velocity): is one sign flipped?"
+            )
         self.inertia_kgm2_ = inertia
         self.viscous_nms_per_rad_ = {d: self.decay_per_s_[d] * inertia for d in DIRECTIONS}
         self.coulomb_nm_ = {d: self.coulomb_over_inertia_[d] * inertia for d in DIRECTIONS}

@@ -232,9 +232,10 @@ class PersonSafetyParameters(Parameters):
     jerk_limit_rad_s3 : float
         Largest angular jerk the motor torque may ask of the platform and foot (its rate is
         limited to this jerk times their inertia).
-    fall_torque_change_nm, fall_window_s, fall_baseline_s : float
-        A fall: the estimated human torque averaged over the window departs by more than this
-        from its average over the baseline before the window.
+    fall_torque_change_nm, fall_window_s, fall_baseline_s, fall_still_rad : float
+        A fall: the magnitude of the estimated human torque averaged over the window drops by
+        more than this below its average over the baseline before, while the platform turns by
+        less than ``fall_still_rad`` over both.
     brake_damping_nms_per_rad, stop_time_s : float
         The fall-safe stop brakes like this damper for this long, then cuts the current.
     """
@@ -244,6 +245,7 @@ class PersonSafetyParameters(Parameters):
     fall_torque_change_nm: float = Positive
     fall_window_s: float = Positive
     fall_baseline_s: float = Positive
+    fall_still_rad: float = Positive
     brake_damping_nms_per_rad: float = Positive
     stop_time_s: float = Positive
 

@@ -12,6 +12,7 @@ pinion, while the real torque also carries the drive's current-sensor noise.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -20,6 +21,7 @@ import numpy as np
 from anklelab.control.pid import PIDGains
 from anklelab.control.safety import SafetyLimits
 from anklelab.data.capstan_ident import IdentData, IdentRun
+from anklelab.errors import ParameterError
 from anklelab.experiments.capstan.closed_loop import simulate_closed_loop
 from anklelab.experiments.capstan.config import CapstanSetup
 from anklelab.platforms import load_platform
@@ -78,6 +80,26 @@ class IdentProtocol:
             velocity_filter_hz=100.0,
         )
     )
+
+    def __post_init__(self) -> None:
+        checks = {
+            "sample_rate_hz": (self.sample_rate_hz, 100.0, 20000.0),
+            "ramp_s": (self.ramp_s, 0.01, 60.0),
+            "hold_s": (self.hold_s, 0.0, 60.0),
+            "coast_s": (self.coast_s, 0.1, 60.0),
+            "chirp_s": (self.chirp_s, 0.1, 600.0),
+        }
+        for name, (value, low, high) in checks.items():
+            if not (math.isfinite(value) and low <= value <= high):
+                raise ParameterError(
+                    f"identification protocol: {name} must be a finite number in "
+                    f"[{low:g}, {high:g}]; got {value!r}"
+                )
+        speeds = self.speeds_rad_s
+        if not speeds or not all(math.isfinite(v) and 0 < v <= 100 for v in speeds):
+            raise ParameterError(
+                f"identification protocol: speeds_rad_s must be finite in (0, 100]; got {speeds}"
+            )
 
 
 def _rig(params: CapstanParameters, protocol: IdentProtocol) -> CapstanSetup:
