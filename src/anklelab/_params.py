@@ -203,8 +203,13 @@ def read_parameter_document(
         data = tomllib.loads(text) if kind == "toml" else json.loads(text)
     except FileNotFoundError:
         raise ParameterError(f"{path}: {what} not found") from None
+    except (IsADirectoryError, PermissionError, UnicodeDecodeError) as exc:
+        reason = "not UTF-8 text" if isinstance(exc, UnicodeDecodeError) else exc.strerror
+        raise ParameterError(f"{path}: cannot read the {what}: {reason}") from None
     except (tomllib.TOMLDecodeError, json.JSONDecodeError) as exc:
         raise ParameterError(f"{path}: not valid {kind.upper()}: {exc}") from None
+    except RecursionError:
+        raise ParameterError(f"{path}: not valid {kind.upper()}: nested too deeply") from None
     if not isinstance(data, dict):
         raise ParameterError(f"{path}: expected a JSON object, got {type(data).__name__}")
     return data
