@@ -38,9 +38,31 @@ from anklelab.platforms.capstan import CapstanParameters, FrictionParameters, Us
 from anklelab.sim.capstan import linear_platform
 from anklelab.sim.capstan.plant import GRAVITY_M_S2
 
-__all__ = ["LIMITS", "DisplayEnvelope", "display_envelope", "fidelity_limit_hz"]
+__all__ = ["LIMITS", "DisplayEnvelope", "PersonLoad", "display_envelope", "fidelity_limit_hz"]
 
 LIMITS = ("workspace", "speed", "torque", "voltage")
+
+
+@dataclass(frozen=True)
+class PersonLoad:
+    """A standing or stepping person as the envelope sees them.
+
+    Attributes
+    ----------
+    stiffness_nm_per_rad, damping_nms_per_rad : float
+        The ankle's impedance; its rest angle follows a slow tilt with
+        ``posture_time_constant_s``, so the stiffness acts as ``K j w tau / (1 + j w tau)``.
+    posture_time_constant_s : float
+        Posture re-alignment time constant, s.
+    load_nm : float
+        The largest torque of the body weight on the platform (it takes that much of the
+        torque budget), N·m.
+    """
+
+    stiffness_nm_per_rad: float
+    damping_nms_per_rad: float
+    posture_time_constant_s: float
+    load_nm: float
 
 
 @dataclass(frozen=True)
@@ -103,6 +125,7 @@ def display_envelope(
     user: UserParameters | None = None,
     person_guard: bool = True,
     model_friction: FrictionParameters | None = None,
+    person: PersonLoad | None = None,
 ) -> DisplayEnvelope:
     """The display envelope of the platform under its controller (see the module notes).
 
@@ -124,6 +147,8 @@ def display_envelope(
         The person guard limits the torque beyond gravity compensation (with a user on).
     model_friction : FrictionParameters, optional
         The controller's friction and inertia model.
+    person : PersonLoad, optional
+        A standing or stepping person (``user`` then gives their foot's inertia).
 
     Examples
     --------
@@ -152,6 +177,11 @@ def display_envelope(
     else:
         torque_limit = params.peak_torque_nm - gravity
     z = lin.stiffness_nm_per_rad - lin.inertia_kgm2 * w**2 + 1j * lin.damping_nms_per_rad * w
+    if person is not None:
+        tau = person.posture_time_constant_s
+        z = z + person.stiffness_nm_per_rad * (1j * w * tau) / (1 + 1j * w * tau)
+        z = z + 1j * w * person.damping_nms_per_rad
+        torque_limit -= person.load_nm
     filter_w = 2 * np.pi * gains.velocity_filter_hz
     speed_filter = np.abs(1.0 / (1.0 + 1j * w / filter_w))
     m = params.motor
