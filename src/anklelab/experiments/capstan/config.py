@@ -8,6 +8,7 @@ sensor fault to inject into a run.
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass, field
 from typing import Literal
@@ -25,6 +26,14 @@ from anklelab.sim.capstan.person import ACTIVITIES, Activity, person_foot
 __all__ = ["CapstanSetup", "Channel", "FaultInjection", "Mode"]
 
 PERSON_FALLS = "person-falls"
+
+
+@functools.cache
+def _shipped_human() -> PerturberatorParameters:
+    """The shipped Perturberator set (frozen, so read once)."""
+    return load_platform("perturberator")  # type: ignore[no-any-return]
+
+
 Mode = Literal["position", "admittance", "impedance", "teleoperation", "open-loop"]
 
 
@@ -188,7 +197,7 @@ class CapstanSetup:
 
     def resolved_human(self) -> PerturberatorParameters:
         """Where the person's ankle, mass and gait come from."""
-        return load_platform("perturberator") if self.human is None else self.human
+        return _shipped_human() if self.human is None else self.human
 
     def foot(self) -> UserParameters | None:
         """What rests on the platform: the person's foot, the seated user, or nothing."""

@@ -182,8 +182,11 @@ def render_scene(
             f"platform's {math.degrees(limit):.1f} deg limit"
         )
 
+    grid = np.geomspace(0.05, setup.fs / 2, 200)
+    amplitudes = analytic_envelope(setup, grid).amplitude_rad
+
     def envelope(f: NDArray[np.float64]) -> NDArray[np.float64]:
-        return analytic_envelope(setup, f).amplitude_rad
+        return np.interp(np.log(f), np.log(grid), amplitudes)
 
     top_speed = SPEED_MARGIN * setup.params.safety.velocity_limit_rad_s
     cutoff = SPLIT_HZ
