@@ -2,31 +2,16 @@
 without --force, and turn bad input into one error line."""
 
 import json
-import sys
+from pathlib import Path
 
 import pytest
 
-from anklelab.cli import run
-
-SCENES = __import__("pathlib").Path(__file__).resolve().parents[1] / "examples" / "scenes"
-
-
-def anklelab(args, monkeypatch, capsys):
-    """Run the entry point in-process: (exit code, stdout, stderr)."""
-    monkeypatch.setattr(sys, "argv", ["anklelab", *args])
-    capsys.readouterr()
-    try:
-        run()
-        code = 0
-    except SystemExit as exit:
-        code = exit.code if isinstance(exit.code, int) else 1
-    out = capsys.readouterr()
-    return code, out.out, out.err
+from tests.test_docs import _anklelab
 
 
 @pytest.fixture
-def cli(monkeypatch, capsys):
-    return lambda *args: anklelab(["capstan", *args], monkeypatch, capsys)
+def cli(monkeypatch, capsys, tmp_path):
+    return lambda *args: _anklelab(["capstan", *args], Path.cwd(), monkeypatch, capsys)
 
 
 def test_tune_prints_gains_and_poles(cli, tmp_path):

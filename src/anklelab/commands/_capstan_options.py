@@ -98,6 +98,19 @@ def numbers(text: str, option: str, *, low: float, high: float, finite: bool = T
     return values
 
 
+def checked(
+    help: str,
+    *,
+    low: float | None = None,
+    high: float | None = None,
+    strict: bool = False,
+    infinite: bool = False,
+) -> Any:
+    """A number option with its help and range (see :func:`number`)."""
+    callback = number(low=low, high=high, strict=strict, infinite=infinite)
+    return typer.Option(help=help, callback=callback)
+
+
 def input_file(path: Path | None, what: str) -> Path | None:
     """``path`` if it names an existing regular file; else a :class:`ParameterError`."""
     if path is None:

@@ -20,10 +20,10 @@ from anklelab.commands._capstan_options import (
     Person,
     SettlingOption,
     SetupOptions,
+    checked,
     explain_faults,
     fail_on_fault,
     fault_text,
-    number,
     numbers,
     table,
     with_setup_options,
@@ -63,9 +63,7 @@ def tune(
     settling_time: SettlingOption = 0.2,
     integral_fraction: Annotated[
         float,
-        typer.Option(
-            help="Ki as a fraction of J w0^3 (0 for PD).", callback=number(low=0.0, high=10.0)
-        ),
+        checked("Ki as a fraction of J w0^3 (0 for PD).", low=0.0, high=10.0),
     ] = 0.2,
     with_user: Annotated[
         bool,
@@ -143,9 +141,7 @@ def step(
     ] = "5,10,15",
     hold: Annotated[
         float,
-        typer.Option(
-            help="Hold after each step, s.", callback=number(low=0.0, high=60.0, strict=True)
-        ),
+        checked("Hold after each step, s.", low=0.0, high=60.0, strict=True),
     ] = 1.5,
     feedforward: Annotated[
         bool, typer.Option("--feedforward/--no-feedforward", help="Inverse-dynamics feed-forward.")
@@ -201,21 +197,17 @@ def step(
 def chirp(
     amplitude: Annotated[
         float,
-        typer.Option(help="Amplitude, degrees.", callback=number(low=0.0, high=40.0, strict=True)),
+        checked("Amplitude, degrees.", low=0.0, high=40.0, strict=True),
     ] = 5.0,
     f0: Annotated[
         float,
-        typer.Option(
-            help="Start frequency, Hz.", callback=number(low=0.0, high=100.0, strict=True)
-        ),
+        checked("Start frequency, Hz.", low=0.0, high=100.0, strict=True),
     ] = 0.2,
     f1: Annotated[
         float,
-        typer.Option(help="End frequency, Hz.", callback=number(low=0.0, high=100.0, strict=True)),
+        checked("End frequency, Hz.", low=0.0, high=100.0, strict=True),
     ] = 5.0,
-    duration: Annotated[
-        float, typer.Option(help="Sweep duration, s.", callback=number(low=0.5, high=600.0))
-    ] = 10.0,
+    duration: Annotated[float, checked("Sweep duration, s.", low=0.5, high=600.0)] = 10.0,
     tracking: Annotated[
         Tracking,
         typer.Option(
@@ -277,12 +269,8 @@ def chirp(
 @app.command("envelope")
 @with_setup_options()
 def envelope(
-    low: Annotated[
-        float, typer.Option(help="Lowest frequency, Hz.", callback=number(low=0.01, high=100.0))
-    ] = 0.1,
-    high: Annotated[
-        float, typer.Option(help="Highest frequency, Hz.", callback=number(low=0.01, high=100.0))
-    ] = 20.0,
+    low: Annotated[float, checked("Lowest frequency, Hz.", low=0.01, high=100.0)] = 0.1,
+    high: Annotated[float, checked("Highest frequency, Hz.", low=0.01, high=100.0)] = 20.0,
     points: Annotated[int, typer.Option(help="Frequencies, log-spaced.", min=2, max=60)] = 13,
     check: Annotated[
         bool,
@@ -361,25 +349,17 @@ def observe(
     ] = Task.hold,
     cutoff: Annotated[
         float,
-        typer.Option(
-            help="Q-filter cut-off, Hz.", callback=number(low=0.0, high=5000.0, strict=True)
-        ),
+        checked("Q-filter cut-off, Hz.", low=0.0, high=5000.0, strict=True),
     ] = 20.0,
     torque_rms: Annotated[
         float,
-        typer.Option(
-            help="Voluntary torque RMS, N·m.", callback=number(low=0.0, high=20.0, strict=True)
-        ),
+        checked("Voluntary torque RMS, N·m.", low=0.0, high=20.0, strict=True),
     ] = 3.0,
     band: Annotated[
         float,
-        typer.Option(
-            help="Voluntary torque up to this frequency, Hz.", callback=number(low=0.2, high=50.0)
-        ),
+        checked("Voluntary torque up to this frequency, Hz.", low=0.2, high=50.0),
     ] = 3.0,
-    duration: Annotated[
-        float, typer.Option(help="Trial length, s.", callback=number(low=2.0, high=600.0))
-    ] = 20.0,
+    duration: Annotated[float, checked("Trial length, s.", low=2.0, high=600.0)] = 20.0,
     options: SetupOptions = None,  # type: ignore[assignment]
 ) -> None:
     """Estimate the user's ankle torque from current and encoder (disturbance observer)."""

@@ -14,11 +14,11 @@ import typer
 
 from anklelab.commands._capstan_options import (
     SetupOptions,
+    checked,
     explain_faults,
     fail_on_fault,
     fault_text,
     input_file,
-    number,
     numbers,
     table,
     with_setup_options,
@@ -86,21 +86,17 @@ def _terrain(spec: str | None, length_m: float, seed: int) -> Any:
 def render(
     stiffness: Annotated[
         float,
-        typer.Option(
-            help="Virtual stiffness, N·m/rad (inf: rigid, admittance only).",
-            callback=number(low=0.0, infinite=True),
+        checked(
+            "Virtual stiffness, N·m/rad (inf: rigid, admittance only).", low=0.0, infinite=True
         ),
     ] = 50.0,
     damping: Annotated[
         float,
-        typer.Option(help="Virtual damping, N·m·s/rad.", callback=number(low=0.0, high=1000.0)),
+        checked("Virtual damping, N·m·s/rad.", low=0.0, high=1000.0),
     ] = 5.0,
     inertia: Annotated[
         float,
-        typer.Option(
-            help="Virtual inertia (admittance), kg·m².",
-            callback=number(low=0.0, high=10.0, strict=True),
-        ),
+        checked("Virtual inertia (admittance), kg·m².", low=0.0, high=10.0, strict=True),
     ] = 0.2,
     mode: Annotated[
         RenderMode, typer.Option(help="admittance (observer-based) or impedance.")
@@ -121,21 +117,15 @@ def render(
     ] = None,
     speed: Annotated[
         float,
-        typer.Option(
-            help="Walking speed over the terrain, m/s.",
-            callback=number(low=0.0, high=3.0, strict=True),
-        ),
+        checked("Walking speed over the terrain, m/s.", low=0.0, high=3.0, strict=True),
     ] = 1.0,
     torque_rms: Annotated[
         float,
-        typer.Option(
-            help="User's voluntary torque RMS, N·m.",
-            callback=number(low=0.0, high=20.0, strict=True),
-        ),
+        checked("User's voluntary torque RMS, N·m.", low=0.0, high=20.0, strict=True),
     ] = 2.0,
     duration: Annotated[
         float,
-        typer.Option(help="Trial length, s (at least 6).", callback=number(low=6.0, high=600.0)),
+        checked("Trial length, s (at least 6).", low=6.0, high=600.0),
     ] = 30.0,
     options: SetupOptions = None,  # type: ignore[assignment]
 ) -> None:
@@ -395,18 +385,13 @@ def teleop(
     ] = "0,50,100,200",
     jitter: Annotated[
         float,
-        typer.Option(
-            help="Random extra delay per packet, up to this, ms.",
-            callback=number(low=0.0, high=1000.0),
-        ),
+        checked("Random extra delay per packet, up to this, ms.", low=0.0, high=1000.0),
     ] = 0.0,
     scheme: Annotated[
         Scheme,
         typer.Option(help="wave: wave variables (passive); direct: angle forward, torque back."),
     ] = Scheme.wave,
-    duration: Annotated[
-        float, typer.Option(help="Trial length per delay, s.", callback=number(low=4.0, high=600.0))
-    ] = 20.0,
+    duration: Annotated[float, checked("Trial length per delay, s.", low=4.0, high=600.0)] = 20.0,
     options: SetupOptions = None,  # type: ignore[assignment]
 ) -> None:
     """Teleoperate a remote robot's foot over a delayed network: tracking and stability

@@ -10,7 +10,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from anklelab.control.tracking import closed_loop_model, reference_derivatives, zpetc_reference
+from anklelab.control.tracking import reference_derivatives, zpetc_reference
 from anklelab.errors import ParameterError
 from anklelab.experiments.capstan.closed_loop import simulate_closed_loop
 from anklelab.experiments.capstan.config import CapstanSetup
@@ -191,15 +191,7 @@ def chirp_tracking(
     reference = desired
     speed, acceleration = np.concatenate([speed, rest]), np.concatenate([acceleration, rest])
     if zpetc:
-        model = closed_loop_model(
-            setup.params,
-            setup.resolved_gains(),
-            setup.fs,
-            feedforward=setup.feedforward,
-            user=setup.foot(),
-            model_friction=setup.model_friction,
-        )
-        reference = zpetc_reference(desired, model)
+        reference = zpetc_reference(desired, setup.loop_model())
         speed, acceleration = reference_derivatives(reference, setup.fs)
     result = simulate_closed_loop(
         setup,

@@ -15,6 +15,7 @@ from typing import Literal
 
 from anklelab.control.pid import PIDGains, design_critically_damped
 from anklelab.control.safety import SafetyLimits
+from anklelab.control.tracking import ClosedLoopModel, closed_loop_model
 from anklelab.errors import ParameterError
 from anklelab.experiments.capstan._loop import FAULTS
 from anklelab.platforms import load_platform
@@ -198,6 +199,17 @@ class CapstanSetup:
     def resolved_human(self) -> PerturberatorParameters:
         """Where the person's ankle, mass and gait come from."""
         return _shipped_human() if self.human is None else self.human
+
+    def loop_model(self) -> ClosedLoopModel:
+        """The sampled closed loop's model, reference to angle (for the ZPETC)."""
+        return closed_loop_model(
+            self.params,
+            self.resolved_gains(),
+            self.fs,
+            feedforward=self.feedforward,
+            user=self.foot(),
+            model_friction=self.model_friction,
+        )
 
     def foot(self) -> UserParameters | None:
         """What rests on the platform: the person's foot, the seated user, or nothing."""

@@ -23,7 +23,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from anklelab.control.envelope import DisplayEnvelope, PersonLoad, display_envelope
-from anklelab.control.tracking import closed_loop_model, reference_derivatives, zpetc_reference
+from anklelab.control.tracking import reference_derivatives, zpetc_reference
 from anklelab.errors import ParameterError
 from anklelab.experiments.capstan.closed_loop import simulate_closed_loop
 from anklelab.experiments.capstan.config import CapstanSetup
@@ -100,15 +100,7 @@ def sine_trial(
 ) -> str:
     """Render one sinusoid (see the module notes); ``""`` if renderable, else what stopped it."""
     desired, held = _sine(frequency_hz, amplitude_rad, setup.fs)
-    model = closed_loop_model(
-        setup.params,
-        setup.resolved_gains(),
-        setup.fs,
-        feedforward=setup.feedforward,
-        user=setup.foot(),
-        model_friction=setup.model_friction,
-    )
-    reference = zpetc_reference(desired, model)
+    reference = zpetc_reference(desired, setup.loop_model())
     speed, acceleration = reference_derivatives(reference, setup.fs)
     run = simulate_closed_loop(
         dataclasses.replace(setup, fall_detection=False),
