@@ -154,7 +154,8 @@ PersonOption = Annotated[
     ),
 ]
 GravityOption = Annotated[
-    bool, typer.Option("--gravity/--no-gravity", help="Feed-forward gravity compensation.")
+    bool,
+    typer.Option("--gravity/--no-gravity", metavar="", help="Feed-forward gravity compensation."),
 ]
 FrictionCompOption = Annotated[
     float,
@@ -192,7 +193,8 @@ OutOption = Annotated[
     ),
 ]
 ForceOption = Annotated[
-    bool, typer.Option("--force", help="Replace result files that already exist in --out.")
+    bool,
+    typer.Option("--force", metavar="", help="Replace result files that already exist in --out."),
 ]
 
 

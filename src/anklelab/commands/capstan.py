@@ -67,7 +67,7 @@ def tune(
     ] = 0.2,
     with_user: Annotated[
         bool,
-        typer.Option("--with-user/--without-user", help="Include the seated user's ankle."),
+        typer.Option("--user/--no-user", metavar="", help="Include the seated user's ankle."),
     ] = False,
     out: OutOption = None,
     force: ForceOption = False,
@@ -137,14 +137,20 @@ def tune(
 def step(
     degrees: Annotated[
         str,
-        typer.Option(help="Set-points, degrees, comma-separated (the monitor refuses NaN/inf)."),
+        typer.Option(
+            metavar="DEG,...",
+            help="Set-points, degrees, comma-separated (the monitor refuses NaN/inf).",
+        ),
     ] = "5,10,15",
     hold: Annotated[
         float,
         checked("Hold after each step, s.", low=0.0, high=60.0, strict=True),
     ] = 1.5,
     feedforward: Annotated[
-        bool, typer.Option("--feedforward/--no-feedforward", help="Inverse-dynamics feed-forward.")
+        bool,
+        typer.Option(
+            "--feedforward/--no-feedforward", metavar="", help="Inverse-dynamics feed-forward."
+        ),
     ] = False,
     options: SetupOptions = None,  # type: ignore[assignment]
 ) -> None:
@@ -275,7 +281,9 @@ def envelope(
     check: Annotated[
         bool,
         typer.Option(
-            "--check/--no-check", help="Find the envelope on the twin too (a few seconds)."
+            "--check/--no-check",
+            metavar="",
+            help="Find the envelope on the twin too (a few seconds).",
         ),
     ] = True,
     options: SetupOptions = None,  # type: ignore[assignment]

@@ -105,12 +105,14 @@ def render(
         bool,
         typer.Option(
             "--passivity-control/--no-passivity-control",
+            metavar="",
             help="Impedance: dissipate what the passivity observer finds the rendering produced.",
         ),
     ] = False,
     terrain: Annotated[
         str | None,
         typer.Option(
+            metavar="hills|FILE",
             help="'hills' or a CSV file (distance_m,height_m): follow its slope.",
             show_default=False,
         ),
@@ -284,7 +286,8 @@ def scene(
 @with_setup_options()
 def zwidth(
     damping: Annotated[
-        str, typer.Option(help="Virtual damping values, N·m·s/rad, comma-separated.")
+        str,
+        typer.Option(metavar="B,...", help="Virtual damping values, N·m·s/rad, comma-separated."),
     ] = "0,0.5,1,2,5",
     iterations: Annotated[
         int, typer.Option(help="Bisection steps per boundary.", min=1, max=20)
@@ -381,7 +384,7 @@ def zwidth(
 @with_setup_options()
 def teleop(
     delays: Annotated[
-        str, typer.Option(help="One-way network delays, ms, comma-separated.")
+        str, typer.Option(metavar="MS,...", help="One-way network delays, ms, comma-separated.")
     ] = "0,50,100,200",
     jitter: Annotated[
         float,
