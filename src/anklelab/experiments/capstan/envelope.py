@@ -96,7 +96,7 @@ def _sine(frequency: float, amplitude: float, fs: float) -> tuple[NDArray[np.flo
 
 
 def sine_trial(
-    setup: CapstanSetup, frequency_hz: float, amplitude_rad: float, *, seed: int = 0
+    setup: CapstanSetup, frequency_hz: float, amplitude_rad: float, *, seed: int | np.random.Generator = 0
 ) -> str:
     """Render one sinusoid (see the module notes); ``""`` if renderable, else what stopped it."""
     desired, held = _sine(frequency_hz, amplitude_rad, setup.fs)
@@ -140,7 +140,7 @@ def check_envelope(
     frequency_hz: ArrayLike,
     *,
     iterations: int = 8,
-    seed: int = 0,
+    seed: int | np.random.Generator = 0,
 ) -> EnvelopeCheck:
     """Find the largest renderable amplitude at each frequency by bisection (in log amplitude,
     bracketed around the analytic value) and compare it with the analytic envelope.

@@ -47,7 +47,7 @@ def push_trial(
     damping_nms_per_rad: float,
     push: str,
     *,
-    seed: int = 0,
+    seed: int | np.random.Generator = 0,
 ) -> bool:
     """Render ``K``, ``B`` while the foot pushes once; True if the platform comes to rest."""
     if push not in PUSHES:
@@ -127,7 +127,7 @@ def measure_zwidth(
     pushes: tuple[str, ...] = ("stomp", "nudge"),
     stiffness_range: tuple[float, float] = (100.0, 300000.0),
     iterations: int = 12,
-    seed: int = 0,
+    seed: int | np.random.Generator = 0,
 ) -> ZWidthMeasurement:
     """Bisect (log stiffness) for the largest stable stiffness at each damping and push.
 
@@ -193,7 +193,7 @@ def passivity_cost(
     settings: list[tuple[float, float]],
     *,
     duration_s: float = 20.0,
-    seed: int = 0,
+    seed: int | np.random.Generator = 0,
 ) -> list[PassivityCost]:
     """Felt stiffness and damping without and with the passivity controller, per ``(K, B)``."""
     out = []
