@@ -19,6 +19,8 @@ PACKAGE = Path(anklelab.__file__).parent
 RANK = {
     "_params": 0,
     "_atomic": 0,
+    "_lock": 0,
+    "_runs": 0,
     "_version": 0,
     "errors": 0,
     "forceplate": 0,

@@ -1,19 +1,19 @@
 """What the ``anklelab capstan`` commands share: one options object for the platform, control
 rate, person, compensation, friction model, seed and output, the option types with their
-checks, the group that turns every usage error into one ``error:`` line, and the output side
-(refuse to replace without ``--force``, record version, settings and input hashes).
+checks, and the output side: ``--out DIR`` is one run of one command, checked before any work,
+locked, built whole and recorded in its run manifest (:mod:`anklelab.commands._files`).
 
 Nothing here imports the implementation (numpy, the twin): ``anklelab --help`` stays fast.
 """
 
 import functools
-import hashlib
 import inspect
 import json
 import math
 import typing
-from collections.abc import Callable, Iterable, Sequence
-from dataclasses import asdict, dataclass, field
+from collections.abc import Callable, Iterable, Iterator, Mapping, Sequence
+from contextlib import contextmanager
+from dataclasses import asdict, dataclass
 from enum import Enum, StrEnum
 from pathlib import Path
 from typing import Annotated, Any
@@ -21,23 +21,9 @@ from typing import Annotated, Any
 import typer
 from rich.console import Console
 from rich.table import Table
-from typer._click.exceptions import UsageError
-from typer.core import TyperGroup
 
-from anklelab._version import __version__
+from anklelab.commands._options import ForceOption, SeedOption
 from anklelab.errors import ParameterError
-
-
-class OneLineErrors(TyperGroup):
-    """A command group whose usage errors (bad option values, unknown options or commands) end
-    in one ``error:`` line and exit code 2, like every other bad input."""
-
-    def invoke(self, ctx: Any) -> Any:
-        try:
-            return super().invoke(ctx)
-        except UsageError as exc:
-            where = exc.ctx.command_path if exc.ctx is not None else ctx.command_path
-            raise ParameterError(f"{where}: {exc.format_message()}") from None
 
 
 class Person(StrEnum):
@@ -111,22 +97,6 @@ def checked(
     return typer.Option(help=help, callback=callback)
 
 
-def input_file(path: Path | None, what: str) -> Path | None:
-    """``path`` if it names an existing regular file; else a :class:`ParameterError`."""
-    if path is None:
-        return None
-    if not path.exists():
-        raise ParameterError(f"{path}: {what} not found")
-    if not path.is_file():
-        raise ParameterError(f"{path}: {what} must be a regular file, not a directory or device")
-    return path
-
-
-def sha256(path: Path) -> str:
-    """SHA-256 of a file's bytes."""
-    return hashlib.sha256(path.read_bytes()).hexdigest()
-
-
 # ------------------------------------------------------------------------- the shared options
 
 ParamsOption = Annotated[
@@ -182,20 +152,41 @@ SettlingOption = Annotated[
         callback=number(low=0.0, high=10.0, strict=True),
     ),
 ]
-SeedOption = Annotated[int, typer.Option(help="Random seed (sensor noise, the person's sway).")]
 OutOption = Annotated[
     Path | None,
     typer.Option(
         "--out",
         "-o",
-        help="Directory for the results (JSON) and figures (PNG).",
+        help="Directory to write: the results (JSON), the figure (PNG) and run.json.",
         show_default=False,
     ),
 ]
-ForceOption = Annotated[
-    bool,
-    typer.Option("--force", metavar="", help="Replace result files that already exist in --out."),
-]
+
+
+class Written:
+    """Where a capstan command writes its files: the run's directory, or nowhere (no ``--out``).
+
+    Attributes
+    ----------
+    directory : Path or None
+        The run's directory (renamed into place when the command ends), or ``None``.
+    """
+
+    def __init__(self, directory: Path | None) -> None:
+        self.directory = directory
+
+    def json(self, name: str, results: Any) -> None:
+        """Write ``name``: one object, ``results`` (non-finite numbers as ``null``)."""
+        if self.directory is None:
+            return
+        from anklelab._atomic import write_text_atomic
+
+        text = json.dumps({"results": _jsonable(results)}, indent=2, allow_nan=False) + "\n"
+        write_text_atomic(self.directory / name, text)
+
+    def path(self, name: str) -> Path | None:
+        """Where to write the file ``name`` (a figure); ``None`` without ``--out``."""
+        return None if self.directory is None else self.directory / name
 
 
 @dataclass(frozen=True)
@@ -212,7 +203,6 @@ class SetupOptions:
     seed: int
     out: Path | None
     force: bool
-    inputs: dict[str, Path] = field(default_factory=dict, compare=False)
 
     def setup(self, **changes: Any) -> Any:
         """The :class:`~anklelab.experiments.capstan.CapstanSetup` these options describe;
@@ -222,11 +212,10 @@ class SetupOptions:
 
         platform = self.platform()
         model = None
-        if input_file(self.friction_model, "friction model (friction.json)") is not None:
+        if self.friction_model is not None:
             model = read_friction_json(
                 self.friction_model, stribeck_exponent=platform.friction.stribeck_exponent
             )
-            self.inputs["friction_model"] = self.friction_model  # type: ignore[index]
         person = self.person.value
         fields: dict[str, Any] = {
             "params": platform,
@@ -244,42 +233,34 @@ class SetupOptions:
         """The capstan parameters (``--params`` or the shipped set)."""
         from anklelab.platforms import load_platform
 
-        if input_file(self.params, "parameter file") is not None:
-            self.inputs["params"] = self.params  # type: ignore[index]
         return load_platform("capstan", self.params)
 
-    def check_outputs(self, names: Iterable[str]) -> None:
-        """Refuse, before any work, to replace existing results without ``--force`` or to write
-        over an input file."""
-        if self.out is None:
-            return
-        if self.out.exists() and not self.out.is_dir():
-            raise ParameterError(f"{self.out}: --out must be a directory; this is a file")
-        inputs = {p.resolve() for p in (self.params, self.friction_model) if p is not None}
-        for name in names:
-            target = self.out / name
-            if target.resolve() in inputs:
-                raise ParameterError(f"{target}: is an input of this command; choose another --out")
-            if target.exists() and not self.force:
-                raise ParameterError(
-                    f"{target}: already exists; pass --force to replace it, or choose another --out"
-                )
+    @contextmanager
+    def output(
+        self, command: str, settings: Mapping[str, Any], inputs: Sequence[Path] = ()
+    ) -> Iterator[Written]:
+        """The output of ``anklelab capstan COMMAND``, checked before any work.
 
-    def write_json(self, name: str, command: str, settings: dict[str, Any], results: Any) -> None:
-        """Write ``OUT/name``: version, command, settings, input hashes and the results."""
+        With ``--out``, the directory is checked (not replaced without ``--force``, never a
+        different command's output, never inside an input), locked, built whole and published
+        with its ``run.json``: these options and ``settings``, and each input file named
+        (``--params``, ``--friction-model`` and ``inputs``) with its SHA-256. Without ``--out``
+        nothing is written.
+        """
         if self.out is None:
+            yield Written(None)
             return
-        from anklelab._atomic import write_text_atomic
+        from anklelab.commands._files import output_directory
 
-        document = {
-            "anklelab_version": __version__,
-            "command": f"anklelab capstan {command}",
-            "settings": _jsonable(asdict(self) | settings),
-            "inputs": {k: {"path": str(p), "sha256": sha256(p)} for k, p in self.inputs.items()},
-            "results": _jsonable(results),
-        }
-        text = json.dumps(document, indent=2, allow_nan=False) + "\n"
-        write_text_atomic(self.out / name, text)
+        named = [p for p in (self.params, self.friction_model, *inputs) if p is not None]
+        with output_directory(
+            self.out, command=f"capstan {command}", force=self.force, inputs=named
+        ) as run:
+            yield Written(run.directory)
+            shared = {k: v for k, v in asdict(self).items() if k not in ("out", "force")}
+            run.settings.update(_jsonable(shared | dict(settings)))
+            for path in named:
+                run.add_input(path)
 
 
 def _jsonable(value: Any) -> Any:
@@ -289,7 +270,7 @@ def _jsonable(value: Any) -> Any:
     if isinstance(value, Path):
         return str(value)
     if isinstance(value, dict):
-        return {str(k): _jsonable(v) for k, v in value.items() if k != "inputs"}
+        return {str(k): _jsonable(v) for k, v in value.items()}
     if isinstance(value, list | tuple):
         return [_jsonable(v) for v in value]
     if hasattr(value, "tolist"):

@@ -13,8 +13,6 @@ import typer
 
 from anklelab.commands import capstan_haptics
 from anklelab.commands._capstan_options import (
-    ForceOption,
-    OneLineErrors,
     OutOption,
     ParamsOption,
     Person,
@@ -28,9 +26,9 @@ from anklelab.commands._capstan_options import (
     table,
     with_setup_options,
 )
+from anklelab.commands._options import ForceOption
 
 app = typer.Typer(
-    cls=OneLineErrors,
     help="Capstan haptic ankle platform (paper 001) on its twin: gains, set-points, chirp, "
     "display envelope, torque observer, haptic rendering, terrain scenes, Z-width, "
     "teleoperation.",
@@ -90,14 +88,16 @@ def tune(
         out=out,
         force=force,
     )
-    options.check_outputs(["gains.json"])
-    platform = options.platform()
-    gains = design_critically_damped(
-        platform,
-        settling_time_s=settling_time,
-        integral_fraction=integral_fraction,
-        with_user=with_user,
-    )
+    settings = {"integral_fraction": integral_fraction, "with_user": with_user}
+    with options.output("tune", settings) as written:
+        platform = options.platform()
+        gains = design_critically_damped(
+            platform,
+            settling_time_s=settling_time,
+            integral_fraction=integral_fraction,
+            with_user=with_user,
+        )
+        written.json("gains.json", gains.model_dump())
     user = platform.user if with_user else None
     lin = linear_platform(platform, user)
     args = (platform, gains.kp_nm_per_rad, gains.kd_nms_per_rad, gains.ki_nm_per_rad_s)
@@ -123,12 +123,6 @@ def tune(
             ["eq. 8 -3 dB bandwidth (Hz)", f"{bandwidth:.2f}"],
             ["eq. 9 compliance at 1 Hz (deg/N·m)", f"{math.degrees(compliance_1hz):.4f}"],
         ],
-    )
-    options.write_json(
-        "gains.json",
-        "tune",
-        {"integral_fraction": integral_fraction, "with_user": with_user},
-        gains.model_dump(),
     )
 
 
@@ -158,42 +152,44 @@ def step(
     from anklelab.experiments.capstan import step_response
 
     set_points = numbers(degrees, "--degrees", low=-90.0, high=90.0, finite=False)
-    options.check_outputs(["steps.json", "steps.png"])
-    setup = options.setup(feedforward=feedforward)
-    runs = [
-        step_response(setup, math.radians(d), hold_s=hold, seed=options.seed) for d in set_points
-    ]
-    rows = []
-    for (run, m), d in zip(runs, set_points, strict=True):
-        code = int(run["fault"].max())
-        figures = (
-            [
-                f"{m.rise_time_s * 1e3:.0f} ms",
-                f"{m.settling_time_5_s * 1e3:.0f} ms",
-                f"{m.settling_time_s * 1e3:.0f} ms",
-                f"{m.overshoot_percent:.1f} %",
-                f"{math.degrees(m.steady_state_error_rad):+.3f} deg",
-            ]
-            if code == 0
-            else ["-"] * 5
-        )
-        rows.append([f"{d:g} deg", *figures, fault_text(code)])
-    table(
-        f"set-point steps at {options.sample_rate:g} Hz (gravity compensation {options.gravity}, "
-        f"friction compensation {options.friction_comp:g})",
-        ["set-point", "rise 10-90 %", "settle 5 %", "settle 2 %", "overshoot", "ss error", "fault"],
-        rows,
-    )
-    explain_faults(run["fault"].max() for run, _ in runs)
-    results = [
-        {"set_point_deg": d, "fault": fault_text(run["fault"].max()), **asdict(m)}
-        for (run, m), d in zip(runs, set_points, strict=True)
-    ]
-    options.write_json("steps.json", "step", {"degrees": set_points, "hold_s": hold}, results)
-    if options.out is not None:
-        from anklelab.report.figures_capstan import step_figure
+    with options.output("step", {"degrees": set_points, "hold_s": hold}) as written:
+        setup = options.setup(feedforward=feedforward)
+        runs = [
+            step_response(setup, math.radians(d), hold_s=hold, seed=options.seed)
+            for d in set_points
+        ]
+        rows = []
+        for (run, m), d in zip(runs, set_points, strict=True):
+            code = int(run["fault"].max())
+            figures = (
+                [
+                    f"{m.rise_time_s * 1e3:.0f} ms",
+                    f"{m.settling_time_5_s * 1e3:.0f} ms",
+                    f"{m.settling_time_s * 1e3:.0f} ms",
+                    f"{m.overshoot_percent:.1f} %",
+                    f"{math.degrees(m.steady_state_error_rad):+.3f} deg",
+                ]
+                if code == 0
+                else ["-"] * 5
+            )
+            rows.append([f"{d:g} deg", *figures, fault_text(code)])
+        table(
+            f"set-point steps at {options.sample_rate:g} Hz (gravity compensation "
+            f"{options.gravity}, friction compensation {options.friction_comp:g})",
+            ["set-point", "rise 10-90 %", "settle 5 %", "settle 2 %", "overshoot", "ss error",
+             "fault"],
+            rows,
+        )  # fmt: skip
+        explain_faults(run["fault"].max() for run, _ in runs)
+        results = [
+            {"set_point_deg": d, "fault": fault_text(run["fault"].max()), **asdict(m)}
+            for (run, m), d in zip(runs, set_points, strict=True)
+        ]
+        written.json("steps.json", results)
+        if (figure := written.path("steps.png")) is not None:
+            from anklelab.report.figures_capstan import step_figure
 
-        step_figure(runs, options.out / "steps.png")
+            step_figure(runs, figure)
     worst = max(int(run["fault"].max()) for run, _ in runs)
     fail_on_fault("step", worst, "a set-point")
 
@@ -231,44 +227,44 @@ def chirp(
 
     if not f0 < f1:
         raise ParameterError(f"--f1 must exceed --f0; got {f0:g} and {f1:g} Hz")
-    options.check_outputs(["chirp.json", "chirp.png"])
-    setup = options.setup(feedforward=tracking is not Tracking.pid)
-    result, m = chirp_tracking(
-        setup,
-        amplitude_rad=math.radians(amplitude),
-        f0_hz=f0,
-        f1_hz=f1,
-        duration_s=duration,
-        zpetc=tracking is Tracking.zpetc,
-        seed=options.seed,
-    )
-    code = int(result["fault"].max())
-
-    def at(frequency: float, values: np.ndarray) -> float:
-        return float(np.interp(frequency, m.frequency_hz, values))
-
-    table(
-        f"chirp {amplitude:g} deg, {f0:g}-{f1:g} Hz over {duration:g} s at "
-        f"{options.sample_rate:g} Hz, tracking: {tracking.value}",
-        ["quantity", "value"],
-        [
-            ["rms tracking error", f"{math.degrees(m.rms_error_rad):.3f} deg"],
-            ["rms error below 3 Hz", f"{math.degrees(m.rms_error_to_3hz_rad):.3f} deg"],
-            ["max error", f"{math.degrees(m.max_error_rad):.3f} deg"],
-            ["tracks within 1 dB and 20 deg up to", _hz(m.tracking_limit_hz, f1)],
-            ["-3 dB bandwidth", _hz(m.bandwidth_3db_hz, f1)],
-            ["45 deg lag bandwidth", _hz(m.bandwidth_45deg_hz, f1)],
-            ["gain at 3 Hz", f"{20 * math.log10(at(3.0, m.gain)):+.2f} dB"],
-            ["phase at 3 Hz", f"{at(3.0, m.phase_deg):.1f} deg"],
-            ["safety fault", fault_text(code)],
-        ],
-    )
     settings = {"amplitude_deg": amplitude, "f0_hz": f0, "f1_hz": f1, "duration_s": duration}
-    options.write_json("chirp.json", "chirp", settings | {"tracking": tracking}, asdict(m))
-    if options.out is not None:
-        from anklelab.report.figures_capstan import chirp_tracking_figure
+    with options.output("chirp", settings | {"tracking": tracking}) as written:
+        setup = options.setup(feedforward=tracking is not Tracking.pid)
+        result, m = chirp_tracking(
+            setup,
+            amplitude_rad=math.radians(amplitude),
+            f0_hz=f0,
+            f1_hz=f1,
+            duration_s=duration,
+            zpetc=tracking is Tracking.zpetc,
+            seed=options.seed,
+        )
+        code = int(result["fault"].max())
 
-        chirp_tracking_figure(result, m, options.out / "chirp.png")
+        def at(frequency: float, values: np.ndarray) -> float:
+            return float(np.interp(frequency, m.frequency_hz, values))
+
+        table(
+            f"chirp {amplitude:g} deg, {f0:g}-{f1:g} Hz over {duration:g} s at "
+            f"{options.sample_rate:g} Hz, tracking: {tracking.value}",
+            ["quantity", "value"],
+            [
+                ["rms tracking error", f"{math.degrees(m.rms_error_rad):.3f} deg"],
+                ["rms error below 3 Hz", f"{math.degrees(m.rms_error_to_3hz_rad):.3f} deg"],
+                ["max error", f"{math.degrees(m.max_error_rad):.3f} deg"],
+                ["tracks within 1 dB and 20 deg up to", _hz(m.tracking_limit_hz, f1)],
+                ["-3 dB bandwidth", _hz(m.bandwidth_3db_hz, f1)],
+                ["45 deg lag bandwidth", _hz(m.bandwidth_45deg_hz, f1)],
+                ["gain at 3 Hz", f"{20 * math.log10(at(3.0, m.gain)):+.2f} dB"],
+                ["phase at 3 Hz", f"{at(3.0, m.phase_deg):.1f} deg"],
+                ["safety fault", fault_text(code)],
+            ],
+        )
+        written.json("chirp.json", asdict(m))
+        if (figure := written.path("chirp.png")) is not None:
+            from anklelab.report.figures_capstan import chirp_tracking_figure
+
+            chirp_tracking_figure(result, m, figure)
     fail_on_fault("chirp", code, "the chirp")
 
 
@@ -300,53 +296,54 @@ def envelope(
             f"--low must be below --high, and --high below a quarter of the sample rate; got "
             f"{low:g}, {high:g} Hz"
         )
-    options.check_outputs(["envelope.json", "envelope.png"])
-    setup = options.setup(feedforward=True)
-    frequencies = np.geomspace(low, high, points)
-    checked = check_envelope(setup, frequencies, seed=options.seed) if check else None
-    analytic = checked.analytic if checked else analytic_envelope(setup, frequencies)
-    rows = []
-    for k, f in enumerate(frequencies):
-        row = [
-            f"{f:.3g} Hz",
-            f"{math.degrees(analytic.amplitude_rad[k]):.3f} deg",
-            analytic.limiting[k],
-        ]
-        if checked:
-            row += [
-                f"{math.degrees(checked.simulated_rad[k]):.3f} deg",
-                f"{checked.error_percent[k]:+.1f} %",
-                checked.reasons[k],
+    settings = {"low_hz": low, "high_hz": high, "points": points, "check": check}
+    with options.output("envelope", settings) as written:
+        setup = options.setup(feedforward=True)
+        frequencies = np.geomspace(low, high, points)
+        checked = check_envelope(setup, frequencies, seed=options.seed) if check else None
+        analytic = checked.analytic if checked else analytic_envelope(setup, frequencies)
+        rows = []
+        for k, f in enumerate(frequencies):
+            row = [
+                f"{f:.3g} Hz",
+                f"{math.degrees(analytic.amplitude_rad[k]):.3f} deg",
+                analytic.limiting[k],
             ]
-        rows.append(row)
-    columns = ["frequency", "model", "limited by"]
-    columns += ["twin", "twin - model", "twin stopped by"] if checked else []
-    table(
-        f"display envelope (torque for motion {analytic.torque_limit_nm:.1f} N·m, person "
-        f"{options.person.value}); closed-loop bandwidth with feed-forward "
-        f"{_hz(analytic.fidelity_hz, 100.0)}",
-        columns,
-        rows,
-    )
-    results = {
-        "frequency_hz": frequencies,
-        "amplitude_rad": analytic.amplitude_rad,
-        "limiting": analytic.limiting,
-        "bounds_rad": analytic.bounds,
-        "torque_limit_nm": analytic.torque_limit_nm,
-        "bandwidth_hz": analytic.fidelity_hz,
-    }
-    if checked:
-        results |= {
-            "twin_amplitude_rad": checked.simulated_rad,
-            "twin_minus_model_percent": checked.error_percent,
-            "twin_stopped_by": checked.reasons,
+            if checked:
+                row += [
+                    f"{math.degrees(checked.simulated_rad[k]):.3f} deg",
+                    f"{checked.error_percent[k]:+.1f} %",
+                    checked.reasons[k],
+                ]
+            rows.append(row)
+        columns = ["frequency", "model", "limited by"]
+        columns += ["twin", "twin - model", "twin stopped by"] if checked else []
+        table(
+            f"display envelope (torque for motion {analytic.torque_limit_nm:.1f} N·m, person "
+            f"{options.person.value}); closed-loop bandwidth with feed-forward "
+            f"{_hz(analytic.fidelity_hz, 100.0)}",
+            columns,
+            rows,
+        )
+        results = {
+            "frequency_hz": frequencies,
+            "amplitude_rad": analytic.amplitude_rad,
+            "limiting": analytic.limiting,
+            "bounds_rad": analytic.bounds,
+            "torque_limit_nm": analytic.torque_limit_nm,
+            "bandwidth_hz": analytic.fidelity_hz,
         }
-    options.write_json("envelope.json", "envelope", {"low_hz": low, "high_hz": high}, results)
-    if options.out is not None:
-        from anklelab.report.figures_capstan import envelope_figure
+        if checked:
+            results |= {
+                "twin_amplitude_rad": checked.simulated_rad,
+                "twin_minus_model_percent": checked.error_percent,
+                "twin_stopped_by": checked.reasons,
+            }
+        written.json("envelope.json", results)
+        if (figure := written.path("envelope.png")) is not None:
+            from anklelab.report.figures_capstan import envelope_figure
 
-        envelope_figure(analytic, checked, options.out / "envelope.png")
+            envelope_figure(analytic, checked, figure)
 
 
 @app.command("observe")
@@ -374,36 +371,35 @@ def observe(
     from anklelab.experiments.capstan import observer_trial
 
     name = f"observer_{task.value}"
-    options.check_outputs([f"{name}.json", f"{name}.png"])
-    setup = options.setup(observer_cutoff_hz=cutoff)
-    result, m = observer_trial(
-        setup,
-        task.value,  # type: ignore[arg-type]
-        duration_s=duration,
-        torque_rms_nm=torque_rms,
-        band_hz=(0.1, band),
-        seed=options.seed,
-    )
-    code = int(result["fault"].max())
-    table(
-        f"disturbance observer ({task.value}, Q cut-off {cutoff:g} Hz, {options.sample_rate:g} Hz)",
-        ["quantity", "value"],
-        [
-            ["VAF", f"{m.vaf_percent:.1f} %"],
-            ["delay", f"{m.delay_s * 1e3:.0f} ms"],
-            ["VAF, delay removed", f"{m.vaf_delay_compensated_percent:.1f} %"],
-            ["rms error", f"{m.rms_error_nm:.3f} N·m"],
-            ["safety fault", fault_text(code)],
-        ],
-    )
     settings = {"task": task, "cutoff_hz": cutoff, "torque_rms_nm": torque_rms, "band_hz": band}
-    options.write_json(f"{name}.json", "observe", settings | {"duration_s": duration}, asdict(m))
-    if options.out is not None:
-        from anklelab.report.figures_capstan import observer_figure
-
-        observer_figure(
-            result, options.out / f"{name}.png", title=f"observer while {task.value}ing"
+    with options.output("observe", settings | {"duration_s": duration}) as written:
+        setup = options.setup(observer_cutoff_hz=cutoff)
+        result, m = observer_trial(
+            setup,
+            task.value,  # type: ignore[arg-type]
+            duration_s=duration,
+            torque_rms_nm=torque_rms,
+            band_hz=(0.1, band),
+            seed=options.seed,
         )
+        code = int(result["fault"].max())
+        table(
+            f"disturbance observer ({task.value}, Q cut-off {cutoff:g} Hz, "
+            f"{options.sample_rate:g} Hz)",
+            ["quantity", "value"],
+            [
+                ["VAF", f"{m.vaf_percent:.1f} %"],
+                ["delay", f"{m.delay_s * 1e3:.0f} ms"],
+                ["VAF, delay removed", f"{m.vaf_delay_compensated_percent:.1f} %"],
+                ["rms error", f"{m.rms_error_nm:.3f} N·m"],
+                ["safety fault", fault_text(code)],
+            ],
+        )
+        written.json(f"{name}.json", asdict(m))
+        if (figure := written.path(f"{name}.png")) is not None:
+            from anklelab.report.figures_capstan import observer_figure
+
+            observer_figure(result, figure, title=f"observer while {task.value}ing")
     fail_on_fault("observe", code, "the trial")
 
 

@@ -18,7 +18,6 @@ from anklelab.commands._capstan_options import (
     explain_faults,
     fail_on_fault,
     fault_text,
-    input_file,
     numbers,
     table,
     with_setup_options,
@@ -56,8 +55,9 @@ def _terrain(spec: str | None, length_m: float, seed: int) -> Any:
         return None
     if spec == "hills":
         return TerrainProfile.hills(length_m, seed=seed)
-    path = input_file(Path(spec), "terrain file (CSV: distance_m,height_m)")
-    assert path is not None
+    from anklelab.commands._files import check_input
+
+    path = check_input(Path(spec), what="a terrain file (CSV: distance_m,height_m)", kinds=["file"])
     try:
         with path.open(encoding="utf-8", newline="") as handle:
             rows = list(csv.reader(handle))
@@ -139,58 +139,6 @@ def render(
 
     if mode is RenderMode.impedance and not math.isfinite(stiffness):
         raise ParameterError("--stiffness: impedance rendering needs a finite stiffness")
-    options.check_outputs(["render.json", "render.png"])
-    profile = _terrain(terrain, speed * duration + 1.0, options.seed)
-    setup = options.setup(
-        feedforward=True, lag_compensation=True, passivity_control=passivity_control
-    )
-    env = VirtualEnvironment(
-        stiffness_nm_per_rad=stiffness, damping_nms_per_rad=damping, inertia_kgm2=inertia
-    )
-    result, m = run_render(
-        setup,
-        env,
-        mode=mode.value,  # type: ignore[arg-type]
-        terrain=profile,
-        walking_speed_m_s=speed,
-        duration_s=duration,
-        torque_rms_nm=torque_rms,
-        seed=options.seed,
-    )
-    code = int(result["fault"].max())
-    rigid = not math.isfinite(stiffness)
-    felt = [
-        [
-            "stiffness",
-            f"{m.stiffness_nm_per_rad:.1f} N·m/rad "
-            + (
-                "(rigid ground: the loop's and the cable's)"
-                if rigid
-                else f"({_percent(m.stiffness_error_percent)})"
-            ),
-        ]
-    ]
-    if not rigid:  # on rigid ground the foot barely moves: no damping or inertia to fit
-        felt += [
-            [
-                "damping",
-                f"{m.damping_nms_per_rad:.2f} N·m·s/rad ({_percent(m.damping_error_percent)})",
-            ],
-            ["inertia", f"{m.inertia_kgm2:.3f} kg·m²"],
-        ]
-    table(
-        f"{mode.value} rendering of K = {'rigid' if rigid else f'{stiffness:g} N·m/rad'}, "
-        f"B = {damping:g} N·m·s/rad" + (f" over {terrain} terrain" if terrain else ""),
-        ["felt by the foot", "value"],
-        [
-            *felt,
-            [
-                "rms deviation from equilibrium",
-                f"{math.degrees(m.equilibrium_rms_error_rad):.2f} deg",
-            ],
-            ["safety fault", fault_text(code)],
-        ],
-    )
     settings = {
         "stiffness_nm_per_rad": stiffness,
         "damping_nms_per_rad": damping,
@@ -202,16 +150,69 @@ def render(
         "torque_rms_nm": torque_rms,
         "duration_s": duration,
     }
-    options.write_json("render.json", "render", settings, asdict(m))
-    if options.out is not None:
-        from anklelab.report.figures_capstan import render_figure
-
-        eq = (
-            np.zeros(result.n_samples)
-            if profile is None
-            else profile.equilibrium(duration, options.sample_rate, speed)
+    terrain_file = [] if terrain in (None, "hills") else [Path(terrain)]
+    with options.output("render", settings, terrain_file) as written:
+        profile = _terrain(terrain, speed * duration + 1.0, options.seed)
+        setup = options.setup(
+            feedforward=True, lag_compensation=True, passivity_control=passivity_control
         )
-        render_figure(result, eq, options.out / "render.png", title=f"{mode.value} rendering")
+        env = VirtualEnvironment(
+            stiffness_nm_per_rad=stiffness, damping_nms_per_rad=damping, inertia_kgm2=inertia
+        )
+        result, m = run_render(
+            setup,
+            env,
+            mode=mode.value,  # type: ignore[arg-type]
+            terrain=profile,
+            walking_speed_m_s=speed,
+            duration_s=duration,
+            torque_rms_nm=torque_rms,
+            seed=options.seed,
+        )
+        code = int(result["fault"].max())
+        rigid = not math.isfinite(stiffness)
+        felt = [
+            [
+                "stiffness",
+                f"{m.stiffness_nm_per_rad:.1f} N·m/rad "
+                + (
+                    "(rigid ground: the loop's and the cable's)"
+                    if rigid
+                    else f"({_percent(m.stiffness_error_percent)})"
+                ),
+            ]
+        ]
+        if not rigid:  # on rigid ground the foot barely moves: no damping or inertia to fit
+            felt += [
+                [
+                    "damping",
+                    f"{m.damping_nms_per_rad:.2f} N·m·s/rad ({_percent(m.damping_error_percent)})",
+                ],
+                ["inertia", f"{m.inertia_kgm2:.3f} kg·m²"],
+            ]
+        table(
+            f"{mode.value} rendering of K = {'rigid' if rigid else f'{stiffness:g} N·m/rad'}, "
+            f"B = {damping:g} N·m·s/rad" + (f" over {terrain} terrain" if terrain else ""),
+            ["felt by the foot", "value"],
+            [
+                *felt,
+                [
+                    "rms deviation from equilibrium",
+                    f"{math.degrees(m.equilibrium_rms_error_rad):.2f} deg",
+                ],
+                ["safety fault", fault_text(code)],
+            ],
+        )
+        written.json("render.json", asdict(m))
+        if (figure := written.path("render.png")) is not None:
+            from anklelab.report.figures_capstan import render_figure
+
+            eq = (
+                np.zeros(result.n_samples)
+                if profile is None
+                else profile.equilibrium(duration, options.sample_rate, speed)
+            )
+            render_figure(result, eq, figure, title=f"{mode.value} rendering")
     fail_on_fault("render", code, "the rendering")
 
 
@@ -228,58 +229,58 @@ def scene(
     from anklelab.control.scene import load_scene
     from anklelab.experiments.capstan.scene import SPLIT_HZ, render_scene
 
-    path = input_file(scene_file, "scene file")
-    assert path is not None
-    walk = load_scene(path)
-    options.inputs["scene"] = path
-    options.check_outputs(["scene.json", "scene.png"])
-    setup = options.setup(feedforward=True, lag_compensation=True)
-    result, m, profile = render_scene(walk, setup, seed=options.seed)
-    deg = math.degrees
-    rows = [
-        [
-            "slope",
-            f"{deg(m.slope_rms_rad):.2f} deg rms",
-            f"{deg(m.slope_rms_error_rad):.3f} deg rms",
-        ],
-        [
-            "bumps",
-            f"{deg(m.bumps_rms_rad):.3f} deg rms",
-            f"{deg(m.bumps_rms_error_rad):.3f} deg rms",
-        ],
-    ]
-    for k, p in enumerate(m.patches):
-        k_error, b_error = _percent(p.stiffness_error_percent), _percent(p.damping_error_percent)
-        rows += [
+    with options.output("scene", {}, [scene_file]) as written:
+        walk = load_scene(scene_file)
+        setup = options.setup(feedforward=True, lag_compensation=True)
+        result, m, profile = render_scene(walk, setup, seed=options.seed)
+        deg = math.degrees
+        rows = [
             [
-                f"patch {k + 1}: stiffness",
-                f"{p.stiffness_nm_per_rad:g} N·m/rad",
-                f"{p.felt_stiffness_nm_per_rad:.1f} N·m/rad ({k_error})",
+                "slope",
+                f"{deg(m.slope_rms_rad):.2f} deg rms",
+                f"{deg(m.slope_rms_error_rad):.3f} deg rms",
             ],
             [
-                f"patch {k + 1}: damping",
-                f"{p.damping_nms_per_rad:g} N·m·s/rad",
-                f"{p.felt_damping_nms_per_rad:.2f} N·m·s/rad ({b_error})",
+                "bumps",
+                f"{deg(m.bumps_rms_rad):.3f} deg rms",
+                f"{deg(m.bumps_rms_error_rad):.3f} deg rms",
             ],
         ]
-    table(
-        f"scene {walk.name!r}: {walk.path_length_m:g} m at {walk.walking_speed_m_s:g} m/s, "
-        f"{walk.person} person; slope below and bumps above {SPLIT_HZ:g} Hz",
-        ["component", "rendered / commanded", "error / felt"],
-        rows,
-    )
-    scaled = {band: s for band, s in m.bump_scales.items() if s < 1.0}
-    if scaled:
-        typer.echo(
-            "bumps scaled to stay within the display envelope: "
-            + ", ".join(f"{band} x{s:.2f}" for band, s in scaled.items())
+        for k, p in enumerate(m.patches):
+            k_error, b_error = (
+                _percent(p.stiffness_error_percent),
+                _percent(p.damping_error_percent),
+            )
+            rows += [
+                [
+                    f"patch {k + 1}: stiffness",
+                    f"{p.stiffness_nm_per_rad:g} N·m/rad",
+                    f"{p.felt_stiffness_nm_per_rad:.1f} N·m/rad ({k_error})",
+                ],
+                [
+                    f"patch {k + 1}: damping",
+                    f"{p.damping_nms_per_rad:g} N·m·s/rad",
+                    f"{p.felt_damping_nms_per_rad:.2f} N·m·s/rad ({b_error})",
+                ],
+            ]
+        table(
+            f"scene {walk.name!r}: {walk.path_length_m:g} m at {walk.walking_speed_m_s:g} m/s, "
+            f"{walk.person} person; slope below and bumps above {SPLIT_HZ:g} Hz",
+            ["component", "rendered / commanded", "error / felt"],
+            rows,
         )
-    typer.echo(f"safety fault: {fault_text(m.fault)}")
-    options.write_json("scene.json", "scene", {"scene": walk.model_dump()}, asdict(m))
-    if options.out is not None:
-        from anklelab.report.figures_capstan import scene_figure
+        scaled = {band: s for band, s in m.bump_scales.items() if s < 1.0}
+        if scaled:
+            typer.echo(
+                "bumps scaled to stay within the display envelope: "
+                + ", ".join(f"{band} x{s:.2f}" for band, s in scaled.items())
+            )
+        typer.echo(f"safety fault: {fault_text(m.fault)}")
+        written.json("scene.json", asdict(m))
+        if (figure := written.path("scene.png")) is not None:
+            from anklelab.report.figures_capstan import scene_figure
 
-        scene_figure(result, profile, options.out / "scene.png", title=walk.name)
+            scene_figure(result, profile, figure, title=walk.name)
     fail_on_fault("scene", m.fault, "the walk")
 
 
@@ -302,83 +303,86 @@ def zwidth(
     from anklelab.experiments.capstan.zwidth import measure_zwidth, passivity_cost, push_trial
 
     values = numbers(damping, "--damping", low=0.0, high=100.0)
-    options.check_outputs(["zwidth.json", "zwidth.png"])
-    setup = options.setup()
-    z = measure_zwidth(setup, values, iterations=iterations, seed=options.seed)
-    a = z.analytic
-    stomp, nudge = z.error_percent("stomp", "viscous"), z.error_percent("nudge", "quantization")
-    rows = [
-        [
-            f"{b:g}",
-            f"{a.viscous_nm_per_rad[k]:.0f}",
-            f"{z.measured_nm_per_rad['stomp'][k]:.0f} ({_percent(stomp[k])})",
-            f"{a.quantization_nm_per_rad:.0f}",
-            f"{z.measured_nm_per_rad['nudge'][k]:.0f} ({_percent(nudge[k])})",
+    with options.output(
+        "zwidth", {"damping_nms_per_rad": values, "iterations": iterations}
+    ) as written:
+        setup = options.setup()
+        z = measure_zwidth(setup, values, iterations=iterations, seed=options.seed)
+        a = z.analytic
+        stomp, nudge = z.error_percent("stomp", "viscous"), z.error_percent("nudge", "quantization")
+        rows = [
+            [
+                f"{b:g}",
+                f"{a.viscous_nm_per_rad[k]:.0f}",
+                f"{z.measured_nm_per_rad['stomp'][k]:.0f} ({_percent(stomp[k])})",
+                f"{a.quantization_nm_per_rad:.0f}",
+                f"{z.measured_nm_per_rad['nudge'][k]:.0f} ({_percent(nudge[k])})",
+            ]
+            for k, b in enumerate(values)
         ]
-        for k, b in enumerate(values)
-    ]
-    table(
-        f"Z-width at {options.sample_rate:g} Hz, person {options.person.value} "
-        f"(largest stiffness, N·m/rad)",
-        [
-            "damping (N·m·s/rad)",
-            "viscous mode",
-            "stomp (twin)",
-            "quantisation mode",
-            "nudge (twin)",
-        ],
-        rows,
-    )
-    controlled = dataclasses.replace(setup, passivity_control=True)
-    outside = []
-    for push, stiffness, b in (
-        ("stomp", 2 * a.viscous_nm_per_rad[0], values[0]),
-        ("nudge", 2 * a.quantization_nm_per_rad, values[0]),
-    ):
-        if stiffness > 0:
-            plain = push_trial(setup, stiffness, b, push, seed=options.seed)
-            with_pc = push_trial(controlled, stiffness, b, push, seed=options.seed)
-            outside.append(
-                {
-                    "push": push,
-                    "stiffness_nm_per_rad": stiffness,
-                    "damping_nms_per_rad": b,
-                    "stable_without_control": plain,
-                    "stable_with_control": with_pc,
-                }
-            )
-            typer.echo(
-                f"twice outside ({push}, K = {stiffness:.0f} N·m/rad, B = {b:g}): "
-                f"{'stable' if plain else 'unstable'} without, "
-                f"{'stable' if with_pc else 'unstable'} with the passivity controller"
-            )
-    cost = passivity_cost(setup, [(2 * a.viscous_nm_per_rad[0], values[0])], seed=options.seed)
-    for c in cost:
-        typer.echo(
-            f"fidelity cost at K = {c.stiffness_nm_per_rad:.0f}: felt stiffness "
-            f"{c.without.stiffness_nm_per_rad:.0f} -> {c.with_control.stiffness_nm_per_rad:.0f} "
-            f"N·m/rad, felt damping {c.without.damping_nms_per_rad:.2f} -> "
-            f"{c.with_control.damping_nms_per_rad:.2f} N·m·s/rad, {c.dissipated_j * 1e3:.2f} mJ "
-            "dissipated"
+        table(
+            f"Z-width at {options.sample_rate:g} Hz, person {options.person.value} "
+            f"(largest stiffness, N·m/rad)",
+            [
+                "damping (N·m·s/rad)",
+                "viscous mode",
+                "stomp (twin)",
+                "quantisation mode",
+                "nudge (twin)",
+            ],
+            rows,
         )
-    results = {
-        "damping_nms_per_rad": values,
-        "analytic": {
-            "viscous_nm_per_rad": a.viscous_nm_per_rad,
-            "quantization_nm_per_rad": a.quantization_nm_per_rad,
-            "damper_leak": a.leak,
-            "platform_damping_nms_per_rad": a.platform_damping_nms_per_rad,
-            "ankle_damping_nms_per_rad": a.ankle_damping_nms_per_rad,
-        },
-        "measured_nm_per_rad": z.measured_nm_per_rad,
-        "twice_outside": outside,
-        "fidelity_cost": [asdict(c) for c in cost],
-    }
-    options.write_json("zwidth.json", "zwidth", {"iterations": iterations}, results)
-    if options.out is not None:
-        from anklelab.report.figures_capstan import zwidth_figure
+        controlled = dataclasses.replace(setup, passivity_control=True)
+        outside = []
+        for push, stiffness, b in (
+            ("stomp", 2 * a.viscous_nm_per_rad[0], values[0]),
+            ("nudge", 2 * a.quantization_nm_per_rad, values[0]),
+        ):
+            if stiffness > 0:
+                plain = push_trial(setup, stiffness, b, push, seed=options.seed)
+                with_pc = push_trial(controlled, stiffness, b, push, seed=options.seed)
+                outside.append(
+                    {
+                        "push": push,
+                        "stiffness_nm_per_rad": stiffness,
+                        "damping_nms_per_rad": b,
+                        "stable_without_control": plain,
+                        "stable_with_control": with_pc,
+                    }
+                )
+                typer.echo(
+                    f"twice outside ({push}, K = {stiffness:.0f} N·m/rad, B = {b:g}): "
+                    f"{'stable' if plain else 'unstable'} without, "
+                    f"{'stable' if with_pc else 'unstable'} with the passivity controller"
+                )
+        cost = passivity_cost(setup, [(2 * a.viscous_nm_per_rad[0], values[0])], seed=options.seed)
+        for c in cost:
+            felt, controlled_felt = c.without, c.with_control
+            typer.echo(
+                f"fidelity cost at K = {c.stiffness_nm_per_rad:.0f}: felt stiffness "
+                f"{felt.stiffness_nm_per_rad:.0f} -> {controlled_felt.stiffness_nm_per_rad:.0f} "
+                f"N·m/rad, felt damping {felt.damping_nms_per_rad:.2f} -> "
+                f"{controlled_felt.damping_nms_per_rad:.2f} N·m·s/rad, "
+                f"{c.dissipated_j * 1e3:.2f} mJ dissipated"
+            )
+        results = {
+            "damping_nms_per_rad": values,
+            "analytic": {
+                "viscous_nm_per_rad": a.viscous_nm_per_rad,
+                "quantization_nm_per_rad": a.quantization_nm_per_rad,
+                "damper_leak": a.leak,
+                "platform_damping_nms_per_rad": a.platform_damping_nms_per_rad,
+                "ankle_damping_nms_per_rad": a.ankle_damping_nms_per_rad,
+            },
+            "measured_nm_per_rad": z.measured_nm_per_rad,
+            "twice_outside": outside,
+            "fidelity_cost": [asdict(c) for c in cost],
+        }
+        written.json("zwidth.json", results)
+        if (figure := written.path("zwidth.png")) is not None:
+            from anklelab.report.figures_capstan import zwidth_figure
 
-        zwidth_figure(z, options.out / "zwidth.png")
+            zwidth_figure(z, figure)
 
 
 @with_setup_options()
@@ -403,39 +407,47 @@ def teleop(
     from anklelab.experiments.capstan.teleop import teleoperate
 
     values = numbers(delays, "--delays", low=0.0, high=2000.0)
-    options.check_outputs(["teleop.json", "teleop.png"])
-    setup = options.setup()
-    runs = [
-        teleoperate(
-            setup,
-            Channel(scheme.value, d / 1e3, jitter / 1e3),  # type: ignore[arg-type]
-            duration_s=duration,
-            seed=options.seed,
-        )
-        for d in values
-    ]
-    deg = math.degrees
-    table(
-        f"teleoperation, {scheme.value} scheme, jitter up to {jitter:g} ms",
-        ["delay", "stable", "angle error", "lag removed", "torque error", "lag removed", "fault"],
-        [
-            [
-                f"{d:g} ms",
-                "yes" if m.stable else "NO",
-                f"{deg(m.position_rms_error_rad):.2f} deg",
-                f"{deg(m.position_rms_error_lagged_rad):.2f} deg",
-                f"{m.force_rms_error_nm:.2f} N·m",
-                f"{m.force_rms_error_lagged_nm:.2f} N·m",
-                fault_text(m.fault),
-            ]
-            for d, (_, m) in zip(values, runs, strict=True)
-        ],
-    )
-    explain_faults(m.fault for _, m in runs)
-    results = [{"delay_ms": d, **asdict(m)} for d, (_, m) in zip(values, runs, strict=True)]
     settings = {"delays_ms": values, "jitter_ms": jitter, "scheme": scheme, "duration_s": duration}
-    options.write_json("teleop.json", "teleop", settings, results)
-    if options.out is not None:
-        from anklelab.report.figures_capstan import teleop_figure
+    with options.output("teleop", settings) as written:
+        setup = options.setup()
+        runs = [
+            teleoperate(
+                setup,
+                Channel(scheme.value, d / 1e3, jitter / 1e3),  # type: ignore[arg-type]
+                duration_s=duration,
+                seed=options.seed,
+            )
+            for d in values
+        ]
+        deg = math.degrees
+        table(
+            f"teleoperation, {scheme.value} scheme, jitter up to {jitter:g} ms",
+            [
+                "delay",
+                "stable",
+                "angle error",
+                "lag removed",
+                "torque error",
+                "lag removed",
+                "fault",
+            ],
+            [
+                [
+                    f"{d:g} ms",
+                    "yes" if m.stable else "NO",
+                    f"{deg(m.position_rms_error_rad):.2f} deg",
+                    f"{deg(m.position_rms_error_lagged_rad):.2f} deg",
+                    f"{m.force_rms_error_nm:.2f} N·m",
+                    f"{m.force_rms_error_lagged_nm:.2f} N·m",
+                    fault_text(m.fault),
+                ]
+                for d, (_, m) in zip(values, runs, strict=True)
+            ],
+        )
+        explain_faults(m.fault for _, m in runs)
+        results = [{"delay_ms": d, **asdict(m)} for d, (_, m) in zip(values, runs, strict=True)]
+        written.json("teleop.json", results)
+        if (figure := written.path("teleop.png")) is not None:
+            from anklelab.report.figures_capstan import teleop_figure
 
-        teleop_figure(runs, values, options.out / "teleop.png", title=f"{scheme.value} scheme")
+            teleop_figure(runs, values, figure, title=f"{scheme.value} scheme")

@@ -1,4 +1,5 @@
-"""Sessions: the in-memory model, the CSV session directory, the native HDF5 store, MATLAB.
+"""Sessions: the in-memory model, the CSV session directory, the native HDF5 store, MATLAB,
+C3D files and mapped imports of lab layouts.
 
 ::
 
@@ -7,6 +8,8 @@
     save_session(session, "my_session.h5")       # atomic; format="dir" writes CSV
 """
 
+from anklelab.data.c3d import C3DFile, plate_load, read_c3d, read_c3d_files
+from anklelab.data.c3d_import import import_c3d
 from anklelab.data.capstan_ident import (
     IdentData,
     IdentRun,
@@ -14,8 +17,11 @@ from anklelab.data.capstan_ident import (
     write_ident_directory,
 )
 from anklelab.data.directory import read_directory, write_directory
+from anklelab.data.grf import grf_tables, write_grf_tables
 from anklelab.data.hdf5 import H5_FORMAT, read_hdf5, write_hdf5
+from anklelab.data.inspect import inspect_file
 from anklelab.data.matlab import read_matlab
+from anklelab.data.matlab_map import import_matlab
 from anklelab.data.session import (
     BENCH_COLUMNS,
     BENCH_MANIFEST_COLUMNS,
@@ -49,6 +55,7 @@ __all__ = [
     "WALKING_COLUMNS",
     "WALKING_MANIFEST_COLUMNS",
     "BenchTest",
+    "C3DFile",
     "IdentData",
     "IdentRun",
     "Recording",
@@ -56,7 +63,14 @@ __all__ = [
     "SessionInfo",
     "WalkingTrial",
     "diff_sessions",
+    "grf_tables",
+    "import_c3d",
+    "import_matlab",
+    "inspect_file",
     "load_session",
+    "plate_load",
+    "read_c3d",
+    "read_c3d_files",
     "read_directory",
     "read_hdf5",
     "read_ident_directory",
@@ -66,6 +80,7 @@ __all__ = [
     "session_kind",
     "summarize",
     "write_directory",
+    "write_grf_tables",
     "write_hdf5",
     "write_ident_directory",
 ]

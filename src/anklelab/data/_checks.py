@@ -20,19 +20,18 @@ from anklelab.data._tree import canonical
 from anklelab.data.session import (
     BENCH_COLUMNS,
     BENCH_MANIFEST_COLUMNS,
-    CALIBRATION_COLUMNS,
     DIRECTIONS,
     SESSION_FORMAT,
-    WALKING_COLUMNS,
     WALKING_MANIFEST_COLUMNS,
     BenchTest,
     Recording,
     Session,
     SessionInfo,
     WalkingTrial,
+    label_text,
 )
 from anklelab.errors import ParameterError, SessionFormatError
-from anklelab.forceplate import PlateGeometry
+from anklelab.forceplate import PLATE_TYPES, plate_class
 
 __all__ = [
     "MAX_STEP_JITTER",
@@ -101,7 +100,8 @@ def info_from_mapping(data: Mapping[str, Any], origin: str, prefix: str = "") ->
         Written before each key in messages (``"session."`` for a MATLAB struct).
 
     Unknown top-level keys and tables, and unknown keys inside ``[force_plate]`` and
-    ``[geometry]``, are kept in :attr:`SessionInfo.extra`.
+    ``[geometry]``, are kept in :attr:`SessionInfo.extra`. ``[force_plate] type`` selects the
+    plate type (default ``kistler8``) and with it the keys the table needs.
     """
     from anklelab.platforms import PLATFORMS  # platforms layer; imported lazily to stay light
 
@@ -123,10 +123,16 @@ def info_from_mapping(data: Mapping[str, Any], origin: str, prefix: str = "") ->
     if not isinstance(subject, str):
         raise SessionFormatError(f"{where}subject: expected a string, got {subject!r}")
     plate = _table(data, "force_plate", origin, prefix)
-    known = PlateGeometry.model_fields
+    plate_type = plate.pop("type", "kistler8")
+    if plate_type not in PLATE_TYPES:
+        raise SessionFormatError(
+            f"{where}force_plate.type: expected one of {', '.join(PLATE_TYPES)}, got {plate_type!r}"
+        )
+    plate_model = plate_class(plate_type)
+    known = plate_model.model_fields
     try:
         geometry_plate = parameters_from_mapping(
-            PlateGeometry,
+            plate_model,
             {k: v for k, v in plate.items() if k in known},
             origin=f"{origin}: {prefix}force_plate",
         )
@@ -176,7 +182,8 @@ def info_to_mapping(info: SessionInfo) -> dict[str, Any]:
         "subject": info.subject,
     }
     out |= {k: v for k, v in extra.items() if k not in ("force_plate", "geometry")}
-    out["force_plate"] = info.force_plate.model_dump() | extra.get("force_plate", {})
+    plate = info.force_plate
+    out["force_plate"] = {"type": plate.type} | plate.model_dump() | extra.get("force_plate", {})
     out["geometry"] = {
         "ankle_height_m": float(info.ankle_height_m),
         "heel_to_ankle_m": float(info.heel_to_ankle_m),
@@ -213,6 +220,8 @@ def check_recording(
     required: tuple[str, ...],
     fs: float,
     row: RowLabel = sample_label,
+    *,
+    nullable: tuple[str, ...] = (),
 ) -> None:
     """Check one recording: required columns finite, time strictly increasing at ``fs``.
 
@@ -231,6 +240,9 @@ def check_recording(
         Sample rate from ``session.toml``, Hz.
     row : callable
         Maps a 0-based sample index to the label used in messages.
+    nullable : tuple of str
+        Required columns that may also hold NaN (empty cells), e.g. a ``grf_cop`` plate's COP;
+        they must not hold infinities.
     """
     check_columns(file, columns, required, "columns")
     lengths = {name: np.shape(values) for name, values in columns.items()}
@@ -244,11 +256,13 @@ def check_recording(
         raise SessionFormatError(f"{file}: {n} data row(s); expected at least 2 samples")
     for name in required:
         finite = np.isfinite(columns[name])
+        if name in nullable:
+            finite |= np.isnan(columns[name])
         if not finite.all():
             i = int(np.argmin(finite))
             raise SessionFormatError(
                 f"{file}: column {name!r}, {row(i)}: value {float(columns[name][i])!r}; "
-                "expected a finite number"
+                "expected a finite number" + (" or an empty cell" if name in nullable else "")
             )
     t = columns["time_s"]
     step = np.diff(t)
@@ -383,22 +397,26 @@ def validate_session(session: Session, origin: str = "session") -> None:
             canonical(tree or {})
         except ValueError as exc:
             raise SessionFormatError(f"{origin}.{name}: {exc}") from None
-    fs = session.info.sample_rate_hz
+    info = session.info
+    fs, nullable = info.sample_rate_hz, info.force_plate.nullable
     for i, rec in enumerate(session.calibration):
         where = f"{origin}.calibration[{i}] {rec.name!r}"
         _check_names(where, rec)
-        check_recording(where, rec.columns, CALIBRATION_COLUMNS, fs)
+        check_recording(where, rec.columns, info.calibration_columns, fs, nullable=nullable)
     labelled = []
     for i, trial in enumerate(session.walking):
         where = f"{origin}.walking[{i}] {trial.recording.name!r}"
+        label_text(trial.trial, f"{where}: trial")
         check_walking_row(where, trial.perturbed, trial.direction, trial.delay_ms)
         _check_names(where, trial.recording)
         _check_extra(where, trial.extra, WALKING_MANIFEST_COLUMNS)
-        check_recording(where, trial.recording.columns, WALKING_COLUMNS, fs)
+        columns = trial.recording.columns
+        check_recording(where, columns, info.walking_columns, fs, nullable=nullable)
         labelled.append((trial, f"walking[{i}]"))
     check_walking_trials(f"{origin}.walking", labelled)
     for i, test in enumerate(session.bench):
         where = f"{origin}.bench[{i}] {test.recording.name!r}"
+        label_text(test.test, f"{where}: test")
         _check_names(where, test.recording)
         _check_extra(where, test.extra, BENCH_MANIFEST_COLUMNS)
         check_recording(where, test.recording.columns, BENCH_COLUMNS, fs)

@@ -4,15 +4,17 @@
 
     session_dir/
       session.toml          format, platform, sample_rate_hz, subject, [force_plate], [geometry]
-      calibration/*.csv     time_s, motor_angle, fx12 ... fz4          (read in natural name order)
+      calibration/*.csv     time_s, motor_angle, plate channels    (read in natural name order)
       walking/trials.csv    trial, file, perturbed (0/1), direction (dorsi|plantar|none), delay_ms
-      walking/<file>.csv    time_s, motor_angle, ankle_angle, fx12 ... fz4
+      walking/<file>.csv    time_s, motor_angle, ankle_angle, plate channels
       bench/tests.csv       test, file, distance_m
       bench/<file>.csv      time_s, displacement_m, force_n
       truth.json            optional: the twin's ground truth (arrays as lists)
       provenance.json       optional: how the session was made
 
-Each folder is optional; a folder that exists must be complete. Unknown columns are kept
+The plate channels are those of the session's plate type (``[force_plate] type``: ``fx12 ...
+fz4`` for ``kistler8``, see :mod:`anklelab.forceplate`); trial and test labels are text. Each
+folder is optional; a folder that exists must be complete. Unknown columns are kept
 (recordings: as float columns; manifests: as strings in ``extra``), unknown files are ignored.
 Error messages name the file, the column and the CSV **line** (line 1 is the header).
 
@@ -53,8 +55,6 @@ from anklelab.data._tree import from_json, to_json
 from anklelab.data.session import (
     BENCH_COLUMNS,
     BENCH_MANIFEST_COLUMNS,
-    CALIBRATION_COLUMNS,
-    WALKING_COLUMNS,
     WALKING_MANIFEST_COLUMNS,
     BenchTest,
     Recording,
@@ -113,7 +113,13 @@ def _data_line(text: str, index: int) -> str:
     return f"line {lines[index]}"
 
 
-def _bad_cell(path: Path, text: str, names: list[str]) -> SessionFormatError | None:
+def _empty_as_nan(cell: str) -> float:
+    return float(cell) if cell.strip() else math.nan
+
+
+def _bad_cell(
+    path: Path, text: str, names: list[str], nullable: tuple[str, ...] = ()
+) -> SessionFormatError | None:
     """Locate the first malformed row or cell (slow path, only after the fast parser failed)."""
     reader = csv.reader(io.StringIO(text))
     next(reader)
@@ -127,6 +133,8 @@ def _bad_cell(path: Path, text: str, names: list[str]) -> SessionFormatError | N
                 "header (line 1)"
             )
         for name, field in zip(names, fields, strict=True):
+            if name in nullable and not field.strip():
+                continue
             try:
                 float(field)
             except ValueError:
@@ -137,7 +145,9 @@ def _bad_cell(path: Path, text: str, names: list[str]) -> SessionFormatError | N
     return None
 
 
-def read_csv_recording(path: Path, required: tuple[str, ...], fs: float) -> Recording:
+def read_csv_recording(
+    path: Path, required: tuple[str, ...], fs: float, *, nullable: tuple[str, ...] = ()
+) -> Recording:
     """Read and check one recording file.
 
     Parameters
@@ -148,6 +158,8 @@ def read_csv_recording(path: Path, required: tuple[str, ...], fs: float) -> Reco
         Columns that must be present (others are kept).
     fs : float
         Sample rate from ``session.toml``, Hz; the ``time_s`` column must agree with it.
+    nullable : tuple of str
+        Required columns whose cells may be empty (read as NaN).
     """
     text = _read_text(path)
     names = _header(path, text, required)
@@ -162,15 +174,19 @@ def read_csv_recording(path: Path, required: tuple[str, ...], fs: float) -> Reco
             ndmin=2,
             comments=None,
             quotechar='"',
+            converters=_empty_as_nan if nullable else None,
         )
     except ValueError as exc:
-        raise _bad_cell(path, text, names) or SessionFormatError(f"{path}: {exc}") from None
+        raise _bad_cell(path, text, names, nullable) or SessionFormatError(
+            f"{path}: {exc}"
+        ) from None
     if data.shape[1] != len(names):
-        raise _bad_cell(path, text, names) or SessionFormatError(
+        raise _bad_cell(path, text, names, nullable) or SessionFormatError(
             f"{path}: {data.shape[1]} fields per row; expected {len(names)} like the header"
         )
     columns = dict(zip(names, np.ascontiguousarray(data.T), strict=True))
-    check_recording(str(path), columns, required, fs, lambda i: _data_line(text, i))
+    row = partial(_data_line, text)
+    check_recording(str(path), columns, required, fs, row, nullable=nullable)
     return Recording(path.name, columns)
 
 
@@ -197,14 +213,12 @@ def _read_manifest(path: Path, required: tuple[str, ...]) -> list[tuple[str, dic
     return rows
 
 
-def _integer(text: str, where: str, column: str) -> int:
-    try:
-        value = float(text)
-    except ValueError:
-        value = math.nan
-    if not value.is_integer():
-        raise SessionFormatError(f"{where}, column {column!r}: got {text!r}; expected an integer")
-    return int(value)
+def _label(text: str, where: str, column: str) -> str:
+    if not text:
+        raise SessionFormatError(
+            f"{where}, column {column!r}: empty cell; expected a label (any non-empty text)"
+        )
+    return text
 
 
 def _float(text: str, where: str, column: str, *, empty_ok: bool = False) -> float:
@@ -258,11 +272,11 @@ def _manifest_rows(
 
 def _walking_rows(folder: Path) -> list[Row]:
     rows: list[Row] = []
-    ids: list[tuple[int, str]] = []
+    ids: list[tuple[str, str]] = []
     for line, where, row, path, extra in _manifest_rows(
         folder, "trials.csv", WALKING_MANIFEST_COLUMNS
     ):
-        trial = _integer(row["trial"], where, "trial")
+        trial = _label(row["trial"], where, "trial")
         perturbed = _flag(row["perturbed"], where, "perturbed")
         direction = row["direction"].lower()
         delay = _float(row["delay_ms"], where, "delay_ms", empty_ok=True)
@@ -283,11 +297,11 @@ def _walking_rows(folder: Path) -> list[Row]:
 
 def _bench_rows(folder: Path) -> list[Row]:
     rows: list[Row] = []
-    ids: list[tuple[int, str]] = []
+    ids: list[tuple[str, str]] = []
     for line, where, row, path, extra in _manifest_rows(
         folder, "tests.csv", BENCH_MANIFEST_COLUMNS
     ):
-        test = _integer(row["test"], where, "test")
+        test = _label(row["test"], where, "test")
         distance = _float(row["distance_m"], where, "distance_m")
         check_distance(where, distance)
         ids.append((test, line))
@@ -348,13 +362,16 @@ def read_directory(path: str | Path, *, progress: Progress | None = None) -> Ses
     bench_rows = _bench_rows(root / "bench") if (root / "bench").is_dir() else []
     tick = ticker(progress, len(calibration_files) + len(walking_rows) + len(bench_rows))
 
-    def read(path: Path, required: tuple[str, ...]) -> Recording:
-        recording = read_csv_recording(path, required, fs)
+    def read(path: Path, required: tuple[str, ...], nullable: tuple[str, ...] = ()) -> Recording:
+        recording = read_csv_recording(path, required, fs, nullable=nullable)
         tick()
         return recording
 
-    calibration = tuple(read(p, CALIBRATION_COLUMNS) for p in calibration_files)
-    walking = tuple(make(recording=read(p, WALKING_COLUMNS)) for p, make in walking_rows)
+    nullable = info.force_plate.nullable
+    calibration = tuple(read(p, info.calibration_columns, nullable) for p in calibration_files)
+    walking = tuple(
+        make(recording=read(p, info.walking_columns, nullable)) for p, make in walking_rows
+    )
     bench = tuple(make(recording=read(p, BENCH_COLUMNS)) for p, make in bench_rows)
     return Session(
         info=info,

@@ -5,9 +5,10 @@ The file mirrors the session directory::
     /                       attribute format = "anklelab-h5/1"
     /session                the session.toml document (keys as attributes, tables as groups)
     /calibration/<file>     one group per recording, one float64 dataset per column
-    /walking/<file>         same, with attributes trial, perturbed, direction, delay_ms and any
-                            further manifest columns (strings)
-    /bench/<file>           same, with attributes test, distance_m and further manifest columns
+    /walking/<file>         same, with attributes trial (text label), perturbed, direction,
+                            delay_ms and any further manifest columns (strings)
+    /bench/<file>           same, with attributes test (text label), distance_m and further
+                            manifest columns
     /truth                  optional ground-truth tree (groups, datasets, attributes)
     /provenance             provenance tree
 
@@ -46,13 +47,12 @@ from anklelab.data._tree import (
 from anklelab.data.session import (
     BENCH_COLUMNS,
     BENCH_MANIFEST_COLUMNS,
-    CALIBRATION_COLUMNS,
-    WALKING_COLUMNS,
     WALKING_MANIFEST_COLUMNS,
     BenchTest,
     Recording,
     Session,
     WalkingTrial,
+    label_text,
 )
 from anklelab.errors import SessionFormatError
 
@@ -129,7 +129,7 @@ def write_hdf5(
         group = create_group(f, "walking")
         for t in session.walking:
             known = {
-                "trial": np.int64(t.trial),
+                "trial": t.trial,
                 "perturbed": np.bool_(t.perturbed),
                 "direction": t.direction,
                 "delay_ms": np.float64(t.delay_ms),
@@ -138,7 +138,7 @@ def write_hdf5(
             tick()
         group = create_group(f, "bench")
         for b in session.bench:
-            known = {"test": np.int64(b.test), "distance_m": np.float64(b.distance_m)}
+            known = {"test": b.test, "distance_m": np.float64(b.distance_m)}
             _write_recording(group, b.recording, dict(b.extra) | known)
             tick()
         if session.truth is not None:
@@ -172,6 +172,13 @@ def _columns(where: str, group: h5py.Group) -> dict[str, np.ndarray]:
         dataset.read(h5py.h5s.ALL, h5py.h5s.ALL, values)
         columns[unlink_name(link)] = values
     return columns
+
+
+def _label(where: str, attrs: dict[str, Any], key: str) -> str:
+    """A trial or test label: text, or an integer (files written before labels were text)."""
+    if key not in attrs:
+        raise SessionFormatError(f"{where}: attribute {key!r} is missing")
+    return label_text(attrs[key], f"{where}: attribute {key!r}")
 
 
 def _attr(where: str, attrs: dict[str, Any], key: str, kind: type) -> Any:
@@ -242,21 +249,23 @@ def read_hdf5(path: str | Path, *, progress: Progress | None = None) -> Session:
         def recording(section: str, link: str, group: h5py.Group, required: tuple[str, ...]):
             where = f"{path}:/{section}/{link}"
             columns = _columns(where, group)
-            check_recording(where, columns, required, fs)
+            check_recording(where, columns, required, fs, nullable=info.force_plate.nullable)
             tick()
             return where, Recording(unlink_name(link), columns)
 
         calibration = []
         if (section := sections["calibration"]) is not None:
             for link, group in section.items():
-                calibration.append(recording("calibration", link, group, CALIBRATION_COLUMNS)[1])
+                calibration.append(
+                    recording("calibration", link, group, info.calibration_columns)[1]
+                )
         walking = []
         if (section := sections["walking"]) is not None:
             for link, group in section.items():
-                where, rec = recording("walking", link, group, WALKING_COLUMNS)
+                where, rec = recording("walking", link, group, info.walking_columns)
                 attrs = dict(group.attrs)
                 trial = WalkingTrial(
-                    trial=_attr(where, attrs, "trial", int),
+                    trial=_label(where, attrs, "trial"),
                     recording=rec,
                     perturbed=_attr(where, attrs, "perturbed", bool),
                     direction=_attr(where, attrs, "direction", str),  # type: ignore[arg-type]
@@ -272,7 +281,7 @@ def read_hdf5(path: str | Path, *, progress: Progress | None = None) -> Session:
                 where, rec = recording("bench", link, group, BENCH_COLUMNS)
                 attrs = dict(group.attrs)
                 test = BenchTest(
-                    test=_attr(where, attrs, "test", int),
+                    test=_label(where, attrs, "test"),
                     recording=rec,
                     distance_m=_attr(where, attrs, "distance_m", float),
                     extra=_extra(attrs, _BENCH_ATTRS),

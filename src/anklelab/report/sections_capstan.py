@@ -1,20 +1,23 @@
 """Report sections for the results of the ``anklelab capstan`` commands.
 
-Each command writes ``OUT/<name>.json`` (``anklelab_version``, ``command``, ``settings``,
-``inputs``, ``results``) and ``OUT/<name>.png``; :func:`capstan_sections` turns those found in a
-directory into report sections: a table of the results and the figure.
+Each command with ``--out DIR`` writes ``DIR/<name>.json`` (one object, ``results``), its figure
+``DIR/<name>.png`` and the run manifest ``DIR/run.json`` (the command, version, settings and
+inputs); :func:`capstan_sections` turns those the run wrote into report sections: a table of the
+results and the figure.
 """
 
 from __future__ import annotations
 
-import json
 import math
+import os
 from collections.abc import Callable
-from pathlib import Path
 from typing import Any
 
+from anklelab._runs import NotEmbeddable
 from anklelab.errors import ResultsFormatError
-from anklelab.report.html import Figure, Section, Table
+from anklelab.report._documents import parse_document
+from anklelab.report.html import Section, Table
+from anklelab.report.sections import MAX_RESULT_BYTES, ResultFiles, read_figures
 
 __all__ = ["CAPSTAN_RESULTS", "capstan_sections"]
 
@@ -215,35 +218,40 @@ CAPSTAN_RESULTS: tuple[tuple[str, str, str, Renderer], ...] = (
 """(file stem, section title, figure caption, table renderer) of each capstan result."""
 
 
-def capstan_sections(directory: Path) -> tuple[list[Section], list[str]]:
-    """Sections for the capstan results found in ``directory``, and figures that are missing.
+def capstan_sections(files: ResultFiles) -> tuple[list[Section], list[str]]:
+    """Sections for the capstan results among ``files``, and notes on figures left out.
 
     Raises
     ------
     ResultsFormatError
-        A result file is not valid JSON or lacks its ``results``.
+        A result file is not one the run wrote, not valid JSON, or not the results of its
+        command.
     """
-    sections, missing = [], []
+    directory, manifest = files.directory, files.manifest
+    sections, notes = [], []
     for stem, title, caption, renderer in CAPSTAN_RESULTS:
-        path = directory / f"{stem}.json"
-        if not path.is_file():
+        name = f"{stem}.json"
+        if not os.path.lexists(directory / name):
             continue
+        command = f"capstan {stem.split('_')[0]}"
         try:
-            document = json.loads(path.read_text(encoding="utf-8"))
-            results = document["results"]
-            columns, rows = renderer(results)
-        except (json.JSONDecodeError, UnicodeDecodeError) as exc:
-            raise ResultsFormatError(f"{path}: not valid JSON: {exc}") from None
-        except (KeyError, TypeError, IndexError, ValueError) as exc:
+            document = parse_document(
+                files.read(name, limit=MAX_RESULT_BYTES), directory / name, ("results",)
+            )
+            columns, rows = renderer(document["results"])
+        except NotEmbeddable as exc:
+            raise ResultsFormatError(str(exc)) from None
+        except (KeyError, TypeError, IndexError, ValueError, AttributeError) as exc:
             raise ResultsFormatError(
-                f"{path}: not the results of `anklelab capstan {stem.split('_')[0]}` "
+                f"{directory / name}: not the results of `anklelab {command}` "
                 f"({type(exc).__name__}: {exc})"
             ) from None
-        figure = directory / f"{stem}.png"
-        figures = [Figure(title, figure.read_bytes(), caption)] if figure.is_file() else []
-        if not figures:
-            missing.append(figure.name)
-        command = document.get("command", f"anklelab capstan {stem}")
-        text = f"From `{command}` (anklelab {document.get('anklelab_version', '?')})."
-        sections.append(Section(title, text, [Table(title, columns, rows)], figures))
-    return sections, missing
+        found = read_figures(files, [(stem, title, caption)])
+        notes += [f"figure not found in {directory}: {m}" for m in found.missing] + found.refused
+        source = (
+            f"From `anklelab {manifest.command}` (anklelab {manifest.anklelab_version})."
+            if manifest is not None
+            else f"From `anklelab {command}`."
+        )
+        sections.append(Section(title, source, [Table(title, columns, rows)], found.figures))
+    return sections, notes

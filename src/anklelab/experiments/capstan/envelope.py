@@ -96,7 +96,11 @@ def _sine(frequency: float, amplitude: float, fs: float) -> tuple[NDArray[np.flo
 
 
 def sine_trial(
-    setup: CapstanSetup, frequency_hz: float, amplitude_rad: float, *, seed: int | np.random.Generator = 0
+    setup: CapstanSetup,
+    frequency_hz: float,
+    amplitude_rad: float,
+    *,
+    seed: int | np.random.Generator = 0,
 ) -> str:
     """Render one sinusoid (see the module notes); ``""`` if renderable, else what stopped it."""
     desired, held = _sine(frequency_hz, amplitude_rad, setup.fs)
