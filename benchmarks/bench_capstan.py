@@ -10,6 +10,9 @@ without a compiler.
 from __future__ import annotations
 
 import math
+import subprocess
+import sys
+from pathlib import Path
 
 import numpy as np
 from scipy.integrate import solve_ivp
@@ -28,7 +31,7 @@ def _ours(setup: CapstanSetup, reference: tuple[np.ndarray, np.ndarray]) -> np.n
 
 def _chirp(fs: float, duration_s: float) -> tuple[np.ndarray, np.ndarray]:
     """The reference (an input of the simulation, made once outside the timing)."""
-    return chirp_reference(math.radians(5), 0.2, 5.0, duration_s, fs)
+    return chirp_reference(math.radians(5), 0.2, 5.0, duration_s, fs)[:2]
 
 
 def _scipy(setup: CapstanSetup, reference: tuple[np.ndarray, np.ndarray]) -> np.ndarray:
@@ -86,6 +89,47 @@ def _scipy(setup: CapstanSetup, reference: tuple[np.ndarray, np.ndarray]) -> np.
     return angles
 
 
+def _scene() -> float:
+    """Render the shipped hill walk; returns the simulated time, s."""
+    from anklelab.control.scene import load_scene
+    from anklelab.experiments.capstan.scene import render_scene
+
+    scene = load_scene(Path(__file__).resolve().parents[1] / "examples/scenes/hill_walk.toml")
+    result, _, _ = render_scene(scene)
+    return result.n_samples / result.fs
+
+
+def _envelope_command() -> None:
+    """The whole command as a user runs it, in a fresh process."""
+    subprocess.run(
+        [str(Path(sys.executable).with_name("anklelab")), "capstan", "envelope", "--points", "13"],
+        check=True,
+        capture_output=True,
+    )
+
+
+def _envelope_trial_seconds() -> float:
+    """Simulated seconds of the envelope command's trials (counted, not timed)."""
+    from anklelab.experiments.capstan import CapstanSetup as Setup
+    from anklelab.experiments.capstan import envelope as module
+
+    total = 0.0
+    original = module.sine_trial
+
+    def counting(setup: Setup, frequency_hz: float, amplitude_rad: float, **kw: object) -> str:
+        nonlocal total
+        period = 1.0 / frequency_hz
+        total += 2 * max(period, 0.5) + max(2 * period, 1.0)
+        return original(setup, frequency_hz, amplitude_rad, **kw)  # type: ignore[arg-type]
+
+    module.sine_trial = counting  # type: ignore[assignment]
+    try:
+        module.check_envelope(Setup(feedforward=True), np.geomspace(0.1, 20.0, 13))
+    finally:
+        module.sine_trial = original
+    return total
+
+
 def run() -> list[Result]:
     rows = []
     for fs in (1000.0, 10000.0):
@@ -102,6 +146,31 @@ def run() -> list[Result]:
             lambda: _scipy(setup, reference),
             "solve_ivp per control period",
             repeat=1,
+        )
+    )
+    simulated = _scene()
+    rows.append(
+        Result("capstan: hill-walk scene", best_time(_scene, repeat=3), simulated, "real time")
+    )
+    from anklelab.experiments.capstan.config import Channel
+    from anklelab.experiments.capstan.teleop import teleoperate
+
+    rows.append(
+        Result(
+            "capstan: 20 s teleoperation, 200 ms",
+            best_time(lambda: teleoperate(setup, Channel("wave", 0.2, 0.05)), repeat=3),
+            20.0,
+            "real time",
+        )
+    )
+    # 13 frequencies x (bracketing + 8 bisection steps) sinusoid trials; baseline: the same
+    # trials' simulated time in real time
+    rows.append(
+        Result(
+            "capstan: `capstan envelope` command",
+            best_time(_envelope_command, repeat=1),
+            _envelope_trial_seconds(),
+            "its trials in real time",
         )
     )
     gap = np.max(np.abs(_ours(setup, reference) - _scipy(setup, reference)))

@@ -5,8 +5,9 @@ Two ways to make the platform feel like K = 50 N·m/rad and B = 5 N·m·s/rad:
 - impedance: the motor applies ``-K (theta - theta_eq) - B w`` on top of gravity compensation.
   No force sensing, but the foot also feels the platform's own inertia and friction.
 - admittance: the observer's estimate of the user's torque drives a virtual mass-spring-damper
-  whose motion the position controller follows: the foot feels the virtual inertia instead of
-  the platform's, and friction hides behind the position loop.
+  whose motion the position controller follows (with feed-forward, the estimated torque taken
+  off the loop and the observer's lag compensated: ``CapstanSetup.for_rendering()``): the foot
+  feels the virtual inertia instead of the platform's, and friction hides behind the loop.
 
 The user pushes with a random voluntary torque; what the foot felt is fitted from the twin's
 true platform angle and interaction torque. Then the equilibrium follows the slope of a hilly
@@ -29,7 +30,7 @@ from anklelab.report import render_figure
 out = Path(sys.argv[1] if len(sys.argv) > 1 else tempfile.mkdtemp(prefix="anklelab-06-"))
 out.mkdir(parents=True, exist_ok=True)
 
-setup = CapstanSetup()  # shipped parameters, the user's foot on, 1 kHz, gravity compensation
+setup = CapstanSetup.for_rendering()  # shipped parameters, the user's foot on, 1 kHz
 spring = VirtualEnvironment(stiffness_nm_per_rad=50.0, damping_nms_per_rad=5.0, inertia_kgm2=0.2)
 print("rendered: K 50 N·m/rad, B 5 N·m·s/rad (admittance: virtual inertia 0.2 kg·m²)")
 for mode in ("impedance", "admittance"):

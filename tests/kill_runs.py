@@ -105,7 +105,7 @@ def prepare(root: Path, needs: set[str]) -> None:
             save_session(session, root / f"noise{variant}", format="dir")
     if "ident" in needs:
         from anklelab.data.capstan_ident import write_ident_directory
-        from anklelab.experiments.capstan_ident import simulate_ident
+        from anklelab.experiments.capstan import simulate_ident
 
         write_ident_directory(simulate_ident(seed=4), root / "ident")
 

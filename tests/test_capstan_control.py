@@ -13,6 +13,7 @@ from anklelab.control import (
     admittance_update,
     design_critically_damped,
 )
+from anklelab.control.haptics import new_admittance_state
 from anklelab.experiments.capstan import CapstanSetup, simulate_closed_loop
 from anklelab.platforms import load_platform
 from anklelab.sim.capstan import linear_platform, reference_to_angle
@@ -36,7 +37,7 @@ def test_design_with_user_accounts_for_the_ankle():
 
 
 def test_python_controller_reproduces_the_compiled_loop():
-    setup = CapstanSetup(friction_compensation=0.5)
+    setup = CapstanSetup(friction_compensation=0.5, guard=False)  # the PID alone
     n = 600
     ref = np.where(np.arange(n) > 50, math.radians(10), 0.0)
     run = simulate_closed_loop(setup, n, reference=ref, seed=3)
@@ -92,13 +93,31 @@ def test_observer_rejects_a_cutoff_above_nyquist():
 
 def test_admittance_settles_at_the_static_deflection():
     env = VirtualEnvironment(stiffness_nm_per_rad=50.0, damping_nms_per_rad=10.0, inertia_kgm2=0.2)
-    state = np.zeros(2)
+    state = new_admittance_state()
+    compiled = env.constants()
     for _ in range(5000):
-        admittance_update(env.constants(), state, 2.0, 0.1, 1e-3)
-    assert state[0] == pytest.approx(0.1 + 2.0 / 50.0, rel=1e-6)
+        offset, speed, _ = admittance_update(compiled, state, 2.0, 50.0, 10.0, 0.1, 1e-3)
+    assert offset == pytest.approx(2.0 / 50.0, rel=1e-6) and abs(speed) < 1e-9
     for _ in range(5000):  # a huge torque is held at the environment's angle limit
-        admittance_update(env.constants(), state, 500.0, 0.0, 1e-3)
-    assert state[0] == env.angle_limit_rad and state[1] == 0.0
+        admittance_update(compiled, state, 500.0, 50.0, 10.0, 0.1, 1e-3)
+    assert state[0] + 0.1 == pytest.approx(env.angle_limit_rad) and state[1] == 0.0
+    # infinite stiffness: rigid ground, no deflection
+    assert admittance_update(compiled, state, 5.0, math.inf, 10.0, 0.1, 1e-3) == (0.0, 0.0, 0.0)
+
+
+def test_admittance_lag_compensation_passes_the_deflection_through_one_over_q():
+    """With lag (2/w0, 1/w0^2) the offset is d + (2/w0) d' + d''/w0^2 of the virtual d."""
+    env = VirtualEnvironment(stiffness_nm_per_rad=50.0, damping_nms_per_rad=5.0)
+    w0 = 2 * math.pi * 20.0
+    plain, lagged = env.constants(), env.constants(lag=(2 / w0, 1 / w0**2))
+    a, b = new_admittance_state(), new_admittance_state()
+    for k in range(300):
+        torque = math.sin(2 * math.pi * 2.0 * k * 1e-3)
+        d_before = a.copy()
+        admittance_update(plain, a, torque, 50.0, 5.0, 0.0, 1e-3)
+        offset, _, acceleration = admittance_update(lagged, b, torque, 50.0, 5.0, 0.0, 1e-3)
+    expected = d_before[0] + 2 / w0 * d_before[1] + acceleration / w0**2
+    assert offset == pytest.approx(expected, rel=1e-12)
 
 
 def test_terrain_profile():

@@ -105,7 +105,7 @@ def test_invalid_argument_value_exits_2_with_message():
         text=True,
     )
     assert proc.returncode == 2
-    assert "task must be 'hold' or 'track'" in proc.stderr and "Traceback" not in proc.stderr
+    assert "--task" in proc.stderr and "'juggle'" in proc.stderr and "Traceback" not in proc.stderr
 
 
 def test_analysis_pipeline_does_not_load_the_twins():

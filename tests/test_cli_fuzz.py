@@ -1,5 +1,5 @@
-"""No tracebacks from the CLI: every non-capstan command, driven with generated bad options and
-bad files, ends in exit code 2 and exactly one ``error:`` line (issue 11).
+"""No tracebacks from the CLI: every command, driven with generated bad options and bad files,
+ends in exit code 2 and exactly one ``error:`` line (issue 11).
 
 Each example corrupts one *slot* of one command (an option value, an input file's content or
 kind, an output path) and leaves the rest valid, so that the command would otherwise run. Bad
@@ -8,7 +8,7 @@ counts, paths that are directories, missing, FIFOs or symbolic links, outputs th
 inside an input. Known failures that belong to other layers are listed at the end, marked
 ``xfail(strict=True)`` with the owner in the reason.
 
-``ANKLELAB_FUZZ_EXAMPLES`` sets the number of examples (default 120); hypothesis's statistics
+``ANKLELAB_FUZZ_EXAMPLES`` sets the number of examples (default 300); hypothesis's statistics
 (``--hypothesis-show-statistics``) count the examples per slot and class.
 """
 
@@ -29,7 +29,8 @@ from hypothesis import strategies as st
 from anklelab.platforms import platform_file
 from anklelab.report.sections import FRICTION_FIGURES
 
-EXAMPLES = int(os.environ.get("ANKLELAB_FUZZ_EXAMPLES", "120"))
+EXAMPLES = int(os.environ.get("ANKLELAB_FUZZ_EXAMPLES", "300"))
+SCENE = Path(__file__).resolve().parents[1] / "examples" / "scenes" / "hill_walk.toml"
 
 
 # --- the valid world every example starts from ---------------------------------------------
@@ -44,6 +45,7 @@ class World:
     study: Path  # a tiny study file (`study` would run it)
     filters: dict = field(repr=False)  # a valid platform-filter document
     scratch: Path  # where each example makes its files
+    scene: Path  # a capstan scene file
 
     def fresh(self) -> Path:
         return Path(tempfile.mkdtemp(dir=self.scratch))
@@ -54,7 +56,7 @@ def world(tmp_path_factory):
     from anklelab.data import save_session
     from anklelab.data.capstan_ident import write_ident_directory
     from anklelab.experiments import simulate_perturberator
-    from anklelab.experiments.capstan_ident import simulate_ident
+    from anklelab.experiments.capstan import simulate_ident
     from anklelab.pipelines.walking import WalkingSettings, fit_platform_filters
 
     root = tmp_path_factory.mktemp("fuzz")
@@ -77,6 +79,8 @@ def world(tmp_path_factory):
     filters = fit_platform_filters(session, WalkingSettings())[0].to_dict()
     (root / "scratch").mkdir()
     (root / "study.toml").write_text(STUDY)
+    scene = root / "scene.toml"
+    scene.write_bytes(SCENE.read_bytes())
     return World(
         save_session(session, root / "s", format="dir"),
         save_session(session, root / "s.h5"),
@@ -85,6 +89,7 @@ def world(tmp_path_factory):
         root / "study.toml",
         filters,
         root / "scratch",
+        scene,
     )
 
 
@@ -169,19 +174,26 @@ def toml_documents(keys: list[str]) -> st.SearchStrategy[bytes]:
     return (known | unknown.map(lambda k: f"{k} = 1\n")).map(str.encode)
 
 
-def corrupted_parameter_file(name: str) -> st.SearchStrategy[bytes]:
-    """The shipped parameter file with one value replaced by a table, or one line dropped."""
-    lines = platform_file(name).read_text().splitlines()
+def corrupted_toml(path: Path, *, drop: bool = True) -> st.SearchStrategy[bytes]:
+    """A valid TOML file with one value replaced by a table, or (``drop``) one line dropped."""
+    lines = path.read_text().splitlines()
     values = [i for i, line in enumerate(lines) if line.split("=")[0].strip().isidentifier()]
 
     def corrupt(args: tuple[int, bool]) -> bytes:
-        i, drop = args
+        i, dropped = args
         changed = list(lines)
         key = changed[i].split("=")[0].strip()
-        changed[i] = "" if drop else f"{key} = {{ a = 1 }}"
+        changed[i] = "" if dropped else f"{key} = {{ a = 1 }}"
         return "\n".join(changed).encode()
 
-    return st.tuples(st.sampled_from(values), st.booleans()).map(corrupt)
+    return st.tuples(st.sampled_from(values), st.booleans() if drop else st.just(False)).map(
+        corrupt
+    )
+
+
+def corrupted_parameter_file(name: str) -> st.SearchStrategy[bytes]:
+    """The shipped parameter file with one value replaced by a table, or one line dropped."""
+    return corrupted_toml(platform_file(name))
 
 
 JSON_VALUES = st.sampled_from(["text", [], {}, None, [[["x"]]], True, -1])
@@ -193,8 +205,10 @@ def json_documents(valid: dict) -> st.SearchStrategy[bytes]:
     """JSON of the wrong shape: not an object, or one key of ``valid`` given a value of the
     wrong type."""
     wrong = JSON_VALUES.filter(lambda value: value != -1)
-    broken = st.tuples(st.sampled_from(sorted(valid)), wrong).map(
-        lambda kv: json.dumps({**valid, kv[0]: kv[1]}).encode()
+    broken = (
+        st.tuples(st.sampled_from(sorted(valid)), wrong)
+        .filter(lambda kv: kv[1] != valid[kv[0]])  # `[]` is a valid list of timing points
+        .map(lambda kv: json.dumps({**valid, kv[0]: kv[1]}).encode())
     )
     return JSON_SHAPES | deep("[", "]") | broken
 
@@ -520,6 +534,126 @@ SLOTS = [
 ]  # fmt: skip
 
 
+# --- the capstan commands -------------------------------------------------------------------
+
+CAPSTAN_BASES = {  # a short valid run of each command; a slot's value comes last and wins
+    "tune": [],
+    "step": ["--degrees", "5", "--hold", "0.3"],
+    "chirp": ["--duration", "1", "--f1", "2"],
+    "envelope": ["--no-check", "--points", "3"],
+    "observe": ["--duration", "2"],
+    "render": ["--duration", "6"],
+    "scene": [SCENE],
+    "zwidth": ["--damping", "0", "--iterations", "1"],
+    "teleop": ["--delays", "0", "--duration", "4"],
+}
+SIMULATING = [name for name in CAPSTAN_BASES if name != "tune"]
+
+
+def from_zero(limit: float) -> st.SearchStrategy[str]:
+    """Not above ``limit``: a strict lower bound, 0 included."""
+    return below(limit) | st.just(str(limit))
+
+
+def ranged(low: st.SearchStrategy[str], high: float) -> st.SearchStrategy[str]:
+    return low | above(high) | NOT_NUMBERS
+
+
+def capstan_args(command: str, *more: object) -> list[object]:
+    return ["capstan", command, *CAPSTAN_BASES[command], *more]
+
+
+def capstan_option(command: str, flag: str, values: st.SearchStrategy) -> Slot:
+    return Slot(f"capstan {command} {flag}", values,
+                lambda w, v, f: capstan_args(command, flag, v))  # fmt: skip
+
+
+def shared_option(flag: str, values: st.SearchStrategy) -> Slot:
+    """An option every simulating capstan command shares, on one of them."""
+    return Slot(f"capstan * {flag}", st.tuples(st.sampled_from(SIMULATING), values),
+                lambda w, v, f: capstan_args(v[0], flag, v[1]))  # fmt: skip
+
+
+def shared_file(flag: str, name: str, bad: st.SearchStrategy[Bad]) -> Slot:
+    return Slot(f"capstan * {flag}", st.tuples(st.sampled_from(SIMULATING), bad),
+                lambda w, v, f: capstan_args(v[0], flag, v[1].make(f, name)))  # fmt: skip
+
+
+TERRAINS = files(st.sampled_from([
+    b"distance_m,height_m\n0,0\n",
+    b"a,b\n1,2\n3,4\n",
+    b"distance_m,height_m\n0,nan\n1,2\n",
+    b"distance_m,height_m\n0,0\n1\n",
+    b"distance_m,height_m\n0,0\n1,x\n",
+]))  # fmt: skip
+SCENE_KEYS = ["name", "walking_speed_m_s", "foot_length_m", "person", "voluntary_torque_rms_nm",
+              "terrain", "compliant"]  # fmt: skip
+INVALID_SCENES = st.sampled_from([
+    b'name = "x"\nwalking_speed_m_s = 1.0\n[[terrain]]\nkind = "slope"\nlength_m = 2\n',
+    b'name = "x"\nwalking_speed_m_s = -1.0\n[[terrain]]\nkind = "flat"\nlength_m = 2\n',
+    b'name = "x"\nwalking_speed_m_s = 1.0\nterrain = []\n',
+    b'name = "x"\nwalking_speed_m_s = 1.0\n[[terrain]]\nkind = "flat"\nlength_m = 2\n'
+    b"[[compliant]]\nstart_m = 1.0\nlength_m = 5.0\nstiffness_nm_per_rad = 50\n"
+    b"damping_nms_per_rad = 1\n",
+    b'name = "wall"\nwalking_speed_m_s = 1.0\n[[terrain]]\nkind = "slope"\nlength_m = 3\n'
+    b"grade_deg = 39\n",
+])  # fmt: skip
+NUMBER_LISTS = st.sampled_from(["abc", "5,,10", "", "5;10", "1,x"])
+SETTLING = ranged(from_zero(0), 10)
+
+CAPSTAN_SLOTS = [
+    shared_option("--sample-rate", ranged(below(1000), 10000)),
+    shared_option("--friction-comp", ranged(below(0), 1)),
+    shared_option("--settling-time", SETTLING),
+    shared_option("--person", not_one_of("none", "seated", "standing", "walking")),
+    shared_option("--seed", ints_below(0) | NOT_INTEGERS),
+    shared_file("--params", "p.toml", CAPSTAN),
+    shared_file("--friction-model", "friction.json", files(json_documents(FRICTION))),
+    out_slot("capstan --out", lambda w, o: ["capstan", "tune", "--out", o]),
+    out_slot("capstan scene --out", lambda w, o: ["capstan", "scene", w.scene, "--out", o],
+             lambda w: w.scene),
+    capstan_option("tune", "--integral-fraction", ranged(below(0), 10)),
+    capstan_option("tune", "--settling-time", SETTLING),
+    capstan_option("step", "--hold", ranged(from_zero(0), 60)),
+    capstan_option("step", "--degrees", NUMBER_LISTS | below(-90) | above(90)),
+    capstan_option("chirp", "--amplitude", ranged(from_zero(0), 40)),
+    capstan_option("chirp", "--f0", ranged(from_zero(0), 100)),
+    capstan_option("chirp", "--f1", ranged(from_zero(0), 100)),
+    capstan_option("chirp", "--duration", ranged(below(0.5), 600)),
+    capstan_option("chirp", "--tracking", not_one_of("pid", "feedforward", "zpetc")),
+    capstan_option("envelope", "--low", ranged(below(0.01), 100)),
+    capstan_option("envelope", "--high", ranged(below(0.01), 100)),
+    capstan_option("envelope", "--points", ints_below(2) | INTEGERS_ABOVE.filter(
+        lambda n: int(n) > 60) | NOT_INTEGERS),
+    capstan_option("observe", "--task", not_one_of("hold", "track")),
+    capstan_option("observe", "--cutoff", ranged(from_zero(0), 5000)),
+    capstan_option("observe", "--torque-rms", ranged(from_zero(0), 20)),
+    capstan_option("observe", "--band", ranged(below(0.2), 50)),
+    capstan_option("observe", "--duration", ranged(below(2), 600)),
+    capstan_option("render", "--stiffness",
+                   below(0) | st.sampled_from(["nan", "-inf", "abc", "", "1,5"])),
+    capstan_option("render", "--damping", ranged(below(0), 1000)),
+    capstan_option("render", "--inertia", ranged(from_zero(0), 10)),
+    capstan_option("render", "--mode", not_one_of("admittance", "impedance")),
+    capstan_option("render", "--speed", ranged(from_zero(0), 3)),
+    capstan_option("render", "--torque-rms", ranged(from_zero(0), 20)),
+    capstan_option("render", "--duration", ranged(below(6), 600)),
+    Slot("capstan render --terrain", TERRAINS,
+         file_slot("t.csv", lambda w, p, f: capstan_args("render", "--terrain", p))),
+    Slot("capstan scene SCENE",
+         files(INVALID_SCENES, toml_documents(SCENE_KEYS), corrupted_toml(SCENE, drop=False)),
+         file_slot("s.toml", lambda w, p, f: ["capstan", "scene", p])),
+    capstan_option("zwidth", "--damping", NUMBER_LISTS | below(0) | above(100)),
+    capstan_option("zwidth", "--iterations", ints_below(1) | INTEGERS_ABOVE.filter(
+        lambda n: int(n) > 20) | NOT_INTEGERS),
+    capstan_option("teleop", "--delays", NUMBER_LISTS | below(0) | above(2000)),
+    capstan_option("teleop", "--jitter", ranged(below(0), 1000)),
+    capstan_option("teleop", "--scheme", not_one_of("wave", "direct")),
+    capstan_option("teleop", "--duration", ranged(below(4), 600)),
+]  # fmt: skip
+SLOTS += CAPSTAN_SLOTS
+
+
 def report_with_figure(w: World, bad: Bad, folder: Path) -> list[str]:
     """A figure that is not a regular file inside DIR: never embedded (a warning), and the
     report is written; so this slot expects exit 0. Handled in the test."""
@@ -584,6 +718,9 @@ def test_every_slot_corrupts_a_command_that_otherwise_runs(world, monkeypatch, c
         ["report", valid_walking(folder), "--out", folder / "w.html"],
         ["platform", "check", "perturberator", platform_file("perturberator")],
         ["session", "info", world.session],
+        capstan_args("tune"),
+        capstan_args("envelope"),
+        capstan_args("step"),
     ):
         code, err = invoke(args, monkeypatch, capsys)
         assert code == 0, (args, err)

@@ -22,7 +22,7 @@ from scipy.signal import lfilter
 
 import anklelab.ident as ident
 from anklelab.errors import NotFittedError, ParameterError
-from anklelab.experiments.capstan_ident import IdentProtocol, simulate_ident
+from anklelab.experiments.capstan import IdentProtocol, simulate_ident
 from anklelab.signals import lowpass, vaf
 
 FS = 1000.0

@@ -10,14 +10,14 @@ from scipy.integrate import solve_ivp
 from typer.testing import CliRunner
 
 from anklelab.cli import app
-from anklelab.errors import NotFittedError, ParameterError, SessionFormatError
-from anklelab.experiments.capstan_ident import (
+from anklelab.data.capstan_ident import (
     IdentData,
     IdentRun,
     read_ident_directory,
-    simulate_ident,
     write_ident_directory,
 )
+from anklelab.errors import NotFittedError, ParameterError, SessionFormatError
+from anklelab.experiments.capstan import simulate_ident
 from anklelab.ident.friction import FrictionIdentifier, read_friction_json
 from anklelab.platforms import load_platform
 

@@ -106,11 +106,11 @@ def test_plain_values_without_sources_are_accepted(tmp_path):
         platform_file("capstan")
         .read_text()
         .replace(
-            'ratio = { value = 20.0, source = "paper 001, Table 1: r_c = 20:1" }', "ratio = 25.0"
+            'ratio = { value = 20.0, source = "paper 001, Table 1: r_c = 20:1" }', "ratio = 21.0"
         )
     )
     params = load_platform("capstan", path)
-    assert params.capstan.ratio == 25.0 and "capstan.ratio" not in params.sources
+    assert params.capstan.ratio == 21.0 and "capstan.ratio" not in params.sources
 
 
 def test_unknown_platform_and_missing_file():

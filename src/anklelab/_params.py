@@ -206,6 +206,8 @@ def _describe(error: Mapping[str, Any], model: type[BaseModel]) -> str:
     if error["type"] == "extra_forbidden":
         parent = _model_at(model, loc[:-1])
         return f"{key}: unknown key{did_you_mean(str(loc[-1]), parent.model_fields)}"
+    if error["type"] == "value_error":  # a model validator's own message names its keys
+        return str(error["ctx"]["error"])
     return f"{key}: {error['msg']}; got {error.get('input')!r}"
 
 

@@ -41,7 +41,7 @@ def batch(
     when the batch completes; run the same command again to resume a batch that was stopped.
     """
     from anklelab.commands._options import session_input
-    from anklelab.commands._progress import recording_progress
+    from anklelab.commands._progress_bars import recording_progress
     from anklelab.pipelines.walking import load_walking_settings
     from anklelab.studies import run_batch
 

@@ -71,7 +71,7 @@ def design(
     OUT/figures/design.png, the pilot study's tables and OUT/run.json.
     """
     from anklelab.commands._kernels import prepare_kernel
-    from anklelab.commands._progress import recording_progress
+    from anklelab.commands._progress_bars import recording_progress
     from anklelab.errors import ParameterError
     from anklelab.pipelines.walking import load_walking_settings
     from anklelab.platforms import load_platform

@@ -62,7 +62,7 @@ def capstan_ident(
     """
     from anklelab.commands._files import output_directory
     from anklelab.commands._progress_bars import recording_progress
-    from anklelab.experiments.capstan_ident import (
+    from anklelab.experiments import (
         IdentProtocol,
         simulate_ident,
         write_ident_directory,

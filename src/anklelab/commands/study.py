@@ -68,7 +68,7 @@ def study(
     """
     from anklelab.commands._files import check_input
     from anklelab.commands._kernels import prepare_kernel
-    from anklelab.commands._progress import recording_progress
+    from anklelab.commands._progress_bars import recording_progress
     from anklelab.platforms import load_platform
     from anklelab.studies import load_study, run_study
 

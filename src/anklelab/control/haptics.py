@@ -9,14 +9,20 @@ Two renderings are offered:
 - **impedance** (:func:`impedance_torque`): the motor applies ``-K (theta - theta_eq) - B w`` on
   top of gravity (and friction) compensation: no force sensing needed, but the device's own
   inertia and uncompensated friction are felt;
-- **admittance** (:func:`admittance_update`): the human torque estimated by the disturbance
-  observer drives the virtual dynamics ``J_v w_v' = T_hat - B w_v - K (theta_v - theta_eq)``,
-  whose state becomes the position controller's reference: the user feels ``J_v`` instead of
-  the device and friction is hidden behind the position loop.
+- **admittance** (:func:`admittance_update`): the human torque ``T_hat`` estimated by the
+  disturbance observer drives a virtual deflection ``d`` from the equilibrium,
+  ``J_v d'' = T_hat - B d' - K d``, and ``theta_eq + d`` becomes the position controller's
+  reference: the user feels ``J_v`` instead of the device, and friction is hidden behind the
+  position loop. The observer's estimate is its Q-filter's output, ``T_hat = Q(s) T``; with
+  ``Q = w0^2 / (s^2 + 2 zeta w0 s + w0^2)`` the reference is ``theta_eq + d + (2 zeta / w0) d'
+  + d'' / w0^2``, i.e. ``d`` passed through ``1/Q``, so that the rendered deflection answers the
+  true torque and not its delayed estimate (the lag compensation; ``lag = (0, 0)`` turns it off).
+  An infinite stiffness renders rigid ground: no deflection.
 """
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from typing import NamedTuple
 
@@ -34,6 +40,7 @@ __all__ = [
     "VirtualEnvironment",
     "admittance_update",
     "impedance_torque",
+    "new_admittance_state",
 ]
 
 
@@ -43,37 +50,59 @@ class VirtualEnvironment(Parameters):
     Attributes
     ----------
     stiffness_nm_per_rad : float
-        Virtual stiffness about the equilibrium angle.
+        Virtual stiffness about the equilibrium angle (``inf``: rigid, admittance only).
     damping_nms_per_rad : float
         Virtual damping.
     inertia_kgm2 : float
         Virtual inertia (admittance rendering only).
     angle_limit_rad : float
-        The virtual angle is held within ``±angle_limit_rad`` (the workspace).
+        The rendered angle is held within ``±angle_limit_rad`` (the workspace).
     """
 
     stiffness_nm_per_rad: float = Field(ge=0)
-    damping_nms_per_rad: float = Field(ge=0)
-    inertia_kgm2: float = Field(default=0.2, gt=0)
-    angle_limit_rad: float = Field(default=0.6, gt=0)
+    damping_nms_per_rad: float = Field(ge=0, allow_inf_nan=False)
+    inertia_kgm2: float = Field(default=0.2, gt=0, allow_inf_nan=False)
+    angle_limit_rad: float = Field(default=0.6, gt=0, lt=math.pi / 2)
 
-    def constants(self) -> EnvironmentConstants:
-        """The compiled form."""
+    def constants(
+        self,
+        *,
+        lag: tuple[float, float] = (0.0, 0.0),
+        passivity_control: bool = False,
+        max_passivity_damping_nms_per_rad: float = 50.0,
+    ) -> EnvironmentConstants:
+        """The compiled form.
+
+        Parameters
+        ----------
+        lag : (float, float)
+            ``(2 zeta / w0, 1 / w0^2)`` of the observer's Q-filter (s, s^2), for the admittance's
+            lag compensation; zeros turn it off.
+        passivity_control : bool
+            Impedance rendering: dissipate whatever energy the passivity observer finds the
+            rendering has produced (:mod:`anklelab.control.passivity`).
+        max_passivity_damping_nms_per_rad : float
+            Largest damping the passivity controller may add.
+        """
         return EnvironmentConstants(
-            self.stiffness_nm_per_rad,
-            self.damping_nms_per_rad,
             self.inertia_kgm2,
             self.angle_limit_rad,
+            lag[0],
+            lag[1],
+            1.0 if passivity_control else 0.0,
+            max_passivity_damping_nms_per_rad,
         )
 
 
 class EnvironmentConstants(NamedTuple):
-    """Compiled form of :class:`VirtualEnvironment`."""
+    """Compiled rendering constants (stiffness and damping come per tick)."""
 
-    stiffness: float
-    damping: float
     inertia: float
     angle_limit: float
+    lag1: float
+    lag2: float
+    passivity_control: float
+    max_passivity_damping: float
 
 
 @dataclass(frozen=True)
@@ -128,30 +157,69 @@ class TerrainProfile:
         return self.slope_angle(speed_m_s * np.arange(round(duration_s * fs)) / fs)
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def impedance_torque(
-    env: EnvironmentConstants, angle: float, speed: float, equilibrium: float
+    stiffness: float, damping: float, angle: float, speed: float, equilibrium: float
 ) -> float:
     """Virtual spring-damper torque on the foot, N·m."""
-    return -env.stiffness * (angle - equilibrium) - env.damping * speed
+    return -stiffness * (angle - equilibrium) - damping * speed
 
 
 @njit(cache=True)
+def new_admittance_state() -> NDArray[np.float64]:
+    """Fresh admittance state ``[deflection, its speed, its last acceleration]``."""
+    return np.zeros(3)
+
+
+@njit(cache=True, inline="always")
 def admittance_update(
     env: EnvironmentConstants,
     state: NDArray[np.float64],
     human_torque: float,
+    stiffness: float,
+    damping: float,
     equilibrium: float,
     dt: float,
-) -> None:
-    """Advance the virtual dynamics ``state = [theta_v, w_v]`` in place by ``dt`` seconds.
+) -> tuple[float, float, float]:
+    """Advance the virtual deflection ``state`` by ``dt`` s; return the reference offset.
 
-    Semi-implicit Euler; the angle is held within the environment's limit (the speed is
-    zeroed there).
+    Parameters
+    ----------
+    env : EnvironmentConstants
+        Virtual inertia, angle limit, lag compensation.
+    state : ndarray, shape (3,)
+        :func:`new_admittance_state`, updated in place (semi-implicit Euler).
+    human_torque : float
+        The observer's estimate of the human torque, N·m.
+    stiffness, damping : float
+        This tick's virtual stiffness (``inf``: rigid ground) and damping.
+    equilibrium : float
+        This tick's equilibrium angle, rad (the deflection is held so that ``equilibrium +
+        deflection`` stays within ``±env.angle_limit``).
+    dt : float
+        Control period, s.
+
+    Returns
+    -------
+    offset, offset_speed : float
+        What to add to the equilibrium's angle and speed for the position controller's
+        reference: the deflection through the lag compensation.
+    acceleration : float
+        The deflection's acceleration, for the inverse-dynamics feed-forward (without the lag
+        compensation's higher derivatives, which would differentiate the estimate's noise).
     """
-    torque = human_torque + impedance_torque(env, state[0], state[1], equilibrium)
-    state[1] += dt * torque / env.inertia
+    if not math.isfinite(stiffness):
+        state[0] = state[1] = state[2] = 0.0
+        return 0.0, 0.0, 0.0
+    acceleration = (human_torque - damping * state[1] - stiffness * state[0]) / env.inertia
+    jerk = (acceleration - state[2]) / dt
+    state[2] = acceleration
+    offset = state[0] + env.lag1 * state[1] + env.lag2 * acceleration
+    offset_speed = state[1] + env.lag1 * acceleration + env.lag2 * jerk
+    state[1] += dt * acceleration
     state[0] += dt * state[1]
-    if abs(state[0]) > env.angle_limit:
-        state[0] = min(max(state[0], -env.angle_limit), env.angle_limit)
+    low, high = -env.angle_limit - equilibrium, env.angle_limit - equilibrium
+    if state[0] < low or state[0] > high:
+        state[0] = min(max(state[0], low), high)
         state[1] = 0.0
+    return offset, offset_speed, acceleration

@@ -33,7 +33,16 @@ __all__ = ["Fault", "SafetyLimits", "SafetyMonitor", "new_safety_state", "safety
 
 
 class Fault(IntEnum):
-    """Why a safety monitor tripped (0: it did not)."""
+    """Why a safety monitor tripped (0: it did not); :attr:`meaning` says it in words.
+
+    Codes 1-7 are this monitor's; ``FALL_STOP`` is latched by the person guard
+    (:mod:`anklelab.control.person_guard`) of the capstan platform.
+
+    Examples
+    --------
+    >>> Fault(7).describe()
+    'COMMAND_NAN (the commanded output was NaN or infinite)'
+    """
 
     NONE = 0
     SENSOR_NAN = 1
@@ -43,6 +52,29 @@ class Fault(IntEnum):
     VELOCITY = 5
     OUTPUT = 6
     COMMAND_NAN = 7
+    FALL_STOP = 8
+
+    @property
+    def meaning(self) -> str:
+        """What tripped, in words."""
+        return _MEANINGS[self]
+
+    def describe(self) -> str:
+        """``NAME (meaning)``, for messages and tables."""
+        return f"{self.name} ({self.meaning})"
+
+
+_MEANINGS = {
+    Fault.NONE: "no fault",
+    Fault.SENSOR_NAN: "a sensor reading was NaN or infinite",
+    Fault.SENSOR_RANGE: "the position reading left the sensor's physical range",
+    Fault.SENSOR_STALE: "the position sensor stopped delivering new samples",
+    Fault.POSITION: "the position left the allowed range",
+    Fault.VELOCITY: "the speed exceeded its limit",
+    Fault.OUTPUT: "the measured output (current) exceeded its trip level",
+    Fault.COMMAND_NAN: "the commanded output was NaN or infinite",
+    Fault.FALL_STOP: "a fall was detected or a stop requested: braked, then the current cut",
+}
 
 
 class SafetyLimits(Parameters):

@@ -37,6 +37,7 @@ from pydantic import Field
 from anklelab._atomic import write_json_atomic
 from anklelab._params import Parameters
 from anklelab.data import save_session, session_hash
+from anklelab.data.capstan_ident import IdentData, write_ident_directory
 from anklelab.data.session import Session
 from anklelab.experiments.capstan import (
     CapstanSetup,
@@ -46,10 +47,10 @@ from anklelab.experiments.capstan import (
     chirp_metrics,
     chirp_tracking,
     observer_trial,
+    simulate_ident,
     step_metrics,
     step_response,
 )
-from anklelab.experiments.capstan_ident import IdentData, simulate_ident, write_ident_directory
 from anklelab.experiments.perturberator import simulate_perturberator
 from anklelab.experiments.perturberator_bode import ServoBode, measure_servo_bode
 from anklelab.ident.friction import FrictionIdentifier

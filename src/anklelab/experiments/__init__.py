@@ -1,20 +1,16 @@
-"""Protocol runners: drive the digital twins through experiments (DESIGN.md section 2)."""
+"""Protocol runners: drive the digital twins through experiments."""
 
+from anklelab.data.capstan_ident import IdentData, read_ident_directory, write_ident_directory
 from anklelab.experiments.capstan import (
     CapstanSetup,
     FaultInjection,
+    IdentProtocol,
     chirp_tracking,
     observer_trial,
     render,
     simulate_closed_loop,
-    step_response,
-)
-from anklelab.experiments.capstan_ident import (
-    IdentData,
-    IdentProtocol,
-    read_ident_directory,
     simulate_ident,
-    write_ident_directory,
+    step_response,
 )
 from anklelab.experiments.perturberator import TrialFault, simulate_perturberator
 from anklelab.experiments.randomised import KINDS, TwinDraw, draw_twin, simulate_randomised

@@ -27,6 +27,7 @@ integrated back to angle (exactly the encoder's, when the velocity column is its
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, ClassVar
@@ -44,7 +45,7 @@ from anklelab.errors import ParameterError, SessionFormatError
 from anklelab.ident._base import Estimator, interval
 from anklelab.metrics import vaf
 from anklelab.platforms.capstan import FrictionParameters
-from anklelab.sim.capstan.friction import friction_array, friction_step, friction_torque
+from anklelab.sim.capstan.friction_law import friction_array, friction_step, friction_torque
 
 __all__ = ["FrictionIdentifier", "SpindownFit", "read_friction_json"]
 
@@ -100,6 +101,21 @@ def _coast(
     if stop - start < 5 or sign == 0.0:
         return None
     return _Coast(run, sign, cut, start, stop)
+
+
+def _check_signs(data: IdentData) -> None:
+    """While the torque drives a spin-down run, the shaft must turn the way it pushes."""
+    for run in data.spindown:
+        driven = (np.abs(run.torque_nm) > 0) & (np.abs(run.velocity_rad_s) > 0)
+        if driven.sum() < 10:
+            continue
+        agree = np.mean(np.sign(run.torque_nm[driven]) == np.sign(run.velocity_rad_s[driven]))
+        if agree < 0.5:
+            raise SessionFormatError(
+                f"spindown/{run.name}: the velocity runs against the driving torque in "
+                f"{100 * (1 - agree):.0f} % of the driven samples; expected positive torque to "
+                "turn the shaft clockwise (positive velocity): is a sign flipped?"
+            )
 
 
 def _coast_model(
@@ -178,7 +194,7 @@ class FrictionIdentifier(Estimator):
 
     Examples
     --------
-    >>> from anklelab.experiments.capstan_ident import simulate_ident
+    >>> from anklelab.experiments.capstan import simulate_ident
     >>> model = FrictionIdentifier().fit(simulate_ident(seed=1))
     >>> round(model.inertia_kgm2_ / 7.54e-4, 2), round(model.coulomb_nm_["ccw"] / 0.038, 2)
     (1.0, 1.0)
@@ -233,8 +249,16 @@ class FrictionIdentifier(Estimator):
 
     # ------------------------------------------------------------------------- fitting
     def fit(self, data: IdentData) -> FrictionIdentifier:
-        """Fit every parameter from an identification session (see the module docstring)."""
+        """Fit every parameter from an identification session (see the module docstring).
+
+        Raises
+        ------
+        SessionFormatError
+            The data cannot be a spin-down and chirp of one shaft: the velocity runs against
+            the torque that drives it (a flipped sign), or the fit finds no positive inertia.
+        """
         self._validate_params()
+        _check_signs(data)
         fs = self.fs_ = data.sample_rate_hz
         min_speed = self.min_speed_rad_s
         for _ in range(2):  # once more if the Stribeck velocity reaches into the fitted coasts
@@ -357,6 +381,12 @@ class FrictionIdentifier(Estimator):
                 f"{self.chirp_min_speed_rad_s:g} rad/s; expected a chirp that keeps it moving"
             )
         inertia = float(np.dot(y, x) / np.dot(x, x))
+        if not (math.isfinite(inertia) and inertia > 0):
+            raise SessionFormatError(
+                f"chirp: the torque and the speed change disagree (fitted inertia {inertia:.3g} "
+                "kg·m²); expected positive torque to speed the shaft up clockwise (positive "
+                "velocity): is one sign flipped?"
+            )
         self.inertia_kgm2_ = inertia
         self.viscous_nms_per_rad_ = {d: self.decay_per_s_[d] * inertia for d in DIRECTIONS}
         self.coulomb_nm_ = {d: self.coulomb_over_inertia_[d] * inertia for d in DIRECTIONS}

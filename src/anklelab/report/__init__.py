@@ -6,10 +6,14 @@ backend) when it draws.
 
 from anklelab.report.figures_capstan import (
     chirp_tracking_figure,
+    envelope_figure,
     friction_figures,
     observer_figure,
     render_figure,
+    scene_figure,
     step_figure,
+    teleop_figure,
+    zwidth_figure,
 )
 from anklelab.report.figures_impedance import impedance_figure
 from anklelab.report.figures_walking import (
@@ -31,6 +35,7 @@ __all__ = [
     "Section",
     "Table",
     "chirp_tracking_figure",
+    "envelope_figure",
     "figure_png",
     "filters_figure",
     "friction_figures",
@@ -41,8 +46,11 @@ __all__ = [
     "render_html",
     "results_report",
     "save_walking_figures",
+    "scene_figure",
     "stance_figure",
     "step_figure",
+    "teleop_figure",
     "walking_figures",
     "write_report",
+    "zwidth_figure",
 ]

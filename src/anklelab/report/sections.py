@@ -111,8 +111,8 @@ FRICTION_FIGURES: tuple[FigureSpec, ...] = (
     (
         "spindown_fit",
         "Spin-down fits",
-        "Pinion speed after the torque cut and the exact solution of "
-        "J ω' + b ω = -T_c sign(ω) fitted per direction (paper 001, Fig. 6).",
+        "Pinion speed after the torque cut (thin lines, one per run) and the exact solution of "
+        "J ω' + b ω = -T_c sign(ω) fitted per direction (dashed; paper 001, Fig. 6).",
     ),
     (
         "chirp_fit",
@@ -440,8 +440,8 @@ def results_report(
     Parameters
     ----------
     directory : str or Path
-        Written by ``anklelab analyze`` (``results.json``) and/or ``anklelab identify friction``
-        (``friction.json``).
+        Written by ``anklelab analyze`` (``results.json``), ``anklelab identify friction``
+        (``friction.json``) and/or ``anklelab capstan`` commands (``steps.json``, ...).
     out : str or Path, optional
         The HTML file (default ``DIRECTORY/report.html``).
     overwrite : bool
@@ -460,6 +460,8 @@ def results_report(
         ``directory`` is not a directory, or holds neither result file, or a result file is
         malformed, not a regular file, or not the one its run wrote.
     """
+    from anklelab.report.sections_capstan import capstan_sections
+
     directory = Path(directory)
     if not directory.is_dir():
         raise ResultsFormatError(f"{directory}: not a directory; expected a results directory")
@@ -494,6 +496,9 @@ def results_report(
                 "(re-run the analysis with figures to include them)"
             )
         notes += found.refused
+    capstan, capstan_notes = capstan_sections(files)
+    sections += capstan
+    notes += capstan_notes
     if not sections:
         nested = sorted(
             str(path.parent.relative_to(directory))
@@ -507,9 +512,9 @@ def results_report(
         )
         hint = f"; found result files in: {', '.join(nested)}" if nested else ""
         raise ResultsFormatError(
-            f"{directory}: no results.json (written by `anklelab analyze`) or friction.json "
-            f"(written by `anklelab identify friction`); expected an analysis output directory"
-            f"{hint}"
+            f"{directory}: no results.json (written by `anklelab analyze`), friction.json "
+            f"(written by `anklelab identify friction`) or result of an `anklelab capstan` "
+            f"command; expected an analysis output directory{hint}"
         )
     out = directory / "report.html" if out is None else Path(out)
     if metadata.get("anklelab version") != __version__:

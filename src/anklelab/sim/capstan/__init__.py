@@ -1,6 +1,6 @@
 """Digital twin of paper 001's capstan-driven haptic ankle platform."""
 
-from anklelab.sim.capstan.friction import (
+from anklelab.sim.capstan.friction_law import (
     friction_array,
     friction_step,
     friction_torque,

@@ -9,7 +9,7 @@ sub-steps:
   loop, limited by the supply voltage; the winding's ``L di/dt = v - R i - K_b w_m`` is
   integrated exactly over each sub-step;
 - the pinion shaft (motor, gearhead and pinion inertia ``J``) feels the motor torque, the cable
-  and friction with real sticking (:func:`~anklelab.sim.capstan.friction.friction_step`);
+  and friction with real sticking (:func:`~anklelab.sim.capstan.friction_law.friction_step`);
 - the two cable strands carry the preload plus ``k1 d`` and ``-k2 d`` (``d`` the stretch at the
   pulley rim, ``k2`` the strand with the tensioning spring in series) and go slack rather than
   push;
@@ -29,7 +29,7 @@ from numpy.typing import NDArray
 from anklelab.errors import ParameterError
 from anklelab.platforms.capstan import CapstanParameters, UserParameters
 from anklelab.sim.capstan._jit import FAST
-from anklelab.sim.capstan.friction import friction_step
+from anklelab.sim.capstan.friction_law import friction_step
 
 __all__ = [
     "STATE_NAMES",
@@ -178,7 +178,7 @@ def plant_advance(
     c : PlantConstants
         From :func:`plant_constants`.
     law : ndarray
-        Friction law, :func:`~anklelab.sim.capstan.friction.friction_array`.
+        Friction law, :func:`~anklelab.sim.capstan.friction_law.friction_array`.
     step : Stepping
         From :func:`stepping`.
     x : ndarray, shape (5,)

@@ -9,7 +9,7 @@ from numpy.typing import ArrayLike, NDArray
 from anklelab.errors import ParameterError
 from anklelab.platforms import load_platform
 from anklelab.platforms.capstan import CapstanParameters, UserParameters
-from anklelab.sim.capstan.friction import friction_array
+from anklelab.sim.capstan.friction_law import friction_array
 from anklelab.sim.capstan.plant import (
     STATE_NAMES,
     PlantConstants,

@@ -1,7 +1,6 @@
-"""Friction and inertia identification data of the capstan platform, made on the twin.
+"""Paper 001's friction and inertia identification tests, run on the capstan twin.
 
-The data and its directory (DESIGN.md section 6) live in :mod:`anklelab.data.capstan_ident`;
-their names are re-exported here.
+The data they produce and its directory format live in :mod:`anklelab.data.capstan_ident`.
 
 :func:`simulate_ident` runs paper 001's two tests on the twin with the cable disconnected: for
 each of four speeds in each direction, a speed-controlled ramp from rest (which breaks the shaft
@@ -13,6 +12,7 @@ pinion, while the real torque also carries the drive's current-sensor noise.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -20,29 +20,14 @@ import numpy as np
 
 from anklelab.control.pid import PIDGains
 from anklelab.control.safety import SafetyLimits
-from anklelab.data.capstan_ident import (
-    CHIRP_COLUMNS,
-    SPINDOWN_COLUMNS,
-    IdentData,
-    IdentRun,
-    read_ident_directory,
-    write_ident_directory,
-)
-from anklelab.experiments.capstan import CapstanSetup, simulate_closed_loop
+from anklelab.data.capstan_ident import IdentData, IdentRun
+from anklelab.errors import ParameterError
+from anklelab.experiments.capstan.closed_loop import simulate_closed_loop
+from anklelab.experiments.capstan.config import CapstanSetup
 from anklelab.platforms import load_platform
 from anklelab.platforms.capstan import CapstanParameters
 
-__all__ = [
-    "CHIRP_COLUMNS",
-    "SPINDOWN_COLUMNS",
-    "IdentData",
-    "IdentProtocol",
-    "IdentRun",
-    "friction_truth",
-    "read_ident_directory",
-    "simulate_ident",
-    "write_ident_directory",
-]
+__all__ = ["IdentProtocol", "friction_truth", "simulate_ident"]
 
 
 def friction_truth(params: CapstanParameters) -> dict[str, Any]:
@@ -95,6 +80,26 @@ class IdentProtocol:
             velocity_filter_hz=100.0,
         )
     )
+
+    def __post_init__(self) -> None:
+        checks = {
+            "sample_rate_hz": (self.sample_rate_hz, 100.0, 20000.0),
+            "ramp_s": (self.ramp_s, 0.01, 60.0),
+            "hold_s": (self.hold_s, 0.0, 60.0),
+            "coast_s": (self.coast_s, 0.1, 60.0),
+            "chirp_s": (self.chirp_s, 0.1, 600.0),
+        }
+        for name, (value, low, high) in checks.items():
+            if not (math.isfinite(value) and low <= value <= high):
+                raise ParameterError(
+                    f"identification protocol: {name} must be a finite number in "
+                    f"[{low:g}, {high:g}]; got {value!r}"
+                )
+        speeds = self.speeds_rad_s
+        if not speeds or not all(math.isfinite(v) and 0 < v <= 100 for v in speeds):
+            raise ParameterError(
+                f"identification protocol: speeds_rad_s must be finite in (0, 100]; got {speeds}"
+            )
 
 
 def _rig(params: CapstanParameters, protocol: IdentProtocol) -> CapstanSetup:
@@ -159,7 +164,7 @@ def simulate_ident(
             profile = 0.5 * (1 - np.cos(np.pi * ramp))
             w_ref = sign * speed * profile / rc
             angle_ref = np.cumsum(w_ref) / fs
-            angle_ref[t >= protocol.ramp_s + protocol.hold_s] = np.nan  # cut: the shaft coasts
+            driven = t < protocol.ramp_s + protocol.hold_s  # then the current is cut: it coasts
             # the shaft rests anywhere within an encoder count
             offset = rng.uniform(0.0, params.encoder.resolution_rad / params.gearhead.ratio) / rc
             result = simulate_closed_loop(
@@ -167,6 +172,7 @@ def simulate_ident(
                 t.size,
                 reference=angle_ref + offset,
                 reference_speed=w_ref,
+                enabled=driven,
                 angle0=offset,
                 seed=rng,
             )
