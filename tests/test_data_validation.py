@@ -2,7 +2,6 @@
 
 import shutil
 
-import h5py
 import numpy as np
 import pytest
 
@@ -127,7 +126,7 @@ CASES = [
     (
         "semicolons",
         lambda d: (d / TRIAL).write_text((d / TRIAL).read_text().replace(",", ";")),
-        r"trial_0002\.csv: header \(line 1\) 'time_s;motor_angle.*' is not comma-separated",
+        r"trial_0002\.csv: header \(line 1\) 'time_s;motor_angle.*' .*is not comma-separated",
     ),
     (
         "unnamed column",
@@ -356,63 +355,7 @@ def test_unperturbed_delay_written_as_nan_is_accepted(session_dir):
     assert np.isnan(read_directory(session_dir).walking[0].delay_ms)
 
 
-# --- HDF5 -----------------------------------------------------------------------------------
-
-
-@pytest.fixture
-def h5(tmp_path):
-    return save_session(random_session(), tmp_path / "s.h5")
-
-
-def test_h5_wrong_format_version(h5):
-    with h5py.File(h5, "a") as f:
-        f.attrs["format"] = "anklelab-h5/2"
-    with pytest.raises(
-        SessionFormatError,
-        match=r"s\.h5: attribute 'format' = 'anklelab-h5/2'; "
-        r"expected 'anklelab-h5/1' \(written by a different anklelab version\)",
-    ):
-        load_session(h5)
-
-
-def test_h5_not_an_anklelab_file(tmp_path):
-    path = tmp_path / "other.h5"
-    with h5py.File(path, "w") as f:
-        f["x"] = [1, 2]
-    with pytest.raises(
-        SessionFormatError,
-        match=r"other\.h5: attribute 'format' = None; "
-        r"expected 'anklelab-h5/1' \(not an anklelab session file\)",
-    ):
-        load_session(path)
-
-
-def test_h5_bad_data_names_path_column_and_sample(h5):
-    with h5py.File(h5, "a") as f:
-        f["walking/trial_0003.csv/fz2"][7] = np.nan
-    with pytest.raises(
-        SessionFormatError,
-        match=r"s\.h5:/walking/trial_0003\.csv: column 'fz2', sample 8: value nan",
-    ):
-        load_session(h5)
-
-
-def test_h5_bad_manifest_attribute(h5):
-    with h5py.File(h5, "a") as f:
-        f["walking/trial_0002.csv"].attrs["direction"] = "none"
-    with pytest.raises(
-        SessionFormatError,
-        match=r"s\.h5:/walking/trial_0002\.csv, column "
-        r"'direction': a perturbed trial needs",
-    ):
-        load_session(h5)
-
-
-def test_h5_session_metadata_checked(h5):
-    with h5py.File(h5, "a") as f:
-        f["session"].attrs["platform"] = "nope"
-    with pytest.raises(SessionFormatError, match=r"s\.h5: /session/platform: unknown platform"):
-        load_session(h5)
+# --- any input ------------------------------------------------------------------------------
 
 
 def test_neither_directory_nor_session_file(tmp_path):

@@ -9,7 +9,7 @@ checks serve the CSV directory, the HDF5 store, MATLAB files and sessions built 
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Iterable, Mapping
+from collections.abc import Callable, Iterable, Mapping, Sequence
 from typing import Any
 
 import numpy as np
@@ -42,9 +42,12 @@ __all__ = [
     "check_columns",
     "check_distance",
     "check_recording",
+    "check_recordings",
     "check_unique",
     "check_walking_row",
     "check_walking_trials",
+    "excerpt",
+    "format_bytes",
     "info_from_mapping",
     "info_to_mapping",
     "sample_label",
@@ -63,6 +66,45 @@ _GEOMETRY_KEYS = ("ankle_height_m", "heel_to_ankle_m")
 def sample_label(index: int) -> str:
     """Row label for array data: ``"sample 1"`` is the first sample (1-based)."""
     return f"sample {index + 1}"
+
+
+def excerpt(value: object, limit: int = 40, *, quote: bool = True) -> str:
+    r"""A short, escaped excerpt of ``value`` for messages, so that no message ever shows more
+    than ``limit`` characters of what a file holds.
+
+    Text is shown as its ``repr`` (control characters escaped); anything else as its ``repr``
+    too, cut to ``limit`` characters with the full length appended when longer.
+
+    Examples
+    --------
+    >>> excerpt("abc")
+    "'abc'"
+    >>> excerpt("x" * 100, 8)
+    "'xxxxxxxx…' (100 characters)"
+    >>> excerpt("a\x00b", quote=False)
+    'a\\x00b'
+    """
+    if isinstance(value, str):
+        shown = repr(value[:limit])
+        if len(value) > limit:
+            shown = f"{shown[:-1]}…{shown[-1]} ({len(value)} characters)"
+        return shown if quote else repr(value[:limit])[1:-1] + ("…" if len(value) > limit else "")
+    text = repr(value)
+    return text if len(text) <= limit else text[:limit] + "…"
+
+
+def format_bytes(n: int) -> str:
+    """``n`` bytes in binary units (``"1.5 GiB"``).
+
+    >>> format_bytes(1536), format_bytes(3 * 2**30)
+    ('1.5 KiB', '3 GiB')
+    """
+    value = float(n)
+    for unit in ("bytes", "KiB", "MiB", "GiB"):
+        if value < 1024 or unit == "GiB":
+            return f"{value:.3g} {unit}"
+        value /= 1024
+    raise AssertionError  # unreachable
 
 
 # --- session.toml -------------------------------------------------------------------------------
@@ -280,6 +322,40 @@ def check_recording(
             f"{file}: column 'time_s', {row(i)}: time step {step[i - 1]:.6g} s; expected "
             f"{period:.6g} s ± {MAX_STEP_JITTER:.0%} at {fs:g} Hz (dropped or repeated samples?)"
         )
+
+
+def check_recordings(
+    files: Sequence[str],
+    names: tuple[str, ...],
+    data: NDArray[np.float64],
+    starts: NDArray[np.int64],
+    lengths: NDArray[np.int64],
+    required: tuple[str, ...],
+    fs: float,
+) -> None:
+    """:func:`check_recording` for many recordings stored end to end, in a few array passes.
+
+    Recording ``i`` is ``data[:, starts[i]:starts[i] + lengths[i]]``, its columns named by
+    ``names`` and located by ``files[i]`` in messages. When the whole block passes the checks
+    at once (every required value finite, every time step within :data:`RATE_TOLERANCE` of
+    ``1 / fs``), each recording would pass on its own; otherwise each is checked on its own,
+    in order, and the first problem is reported with the same message.
+    """
+    if not len(files):
+        return
+    check_columns(files[0], names, required, "columns")
+    period = 1.0 / fs
+    ok = bool(lengths.min() >= 2) and all(
+        np.isfinite(data[names.index(name)]).all() for name in required
+    )
+    if ok:
+        step = np.diff(data[names.index("time_s")])
+        step[starts[1:] - 1] = period  # across two recordings
+        ok = bool((np.abs(step - period) <= RATE_TOLERANCE * period).all())
+    if not ok:
+        for file, start, n in zip(files, starts, lengths, strict=True):
+            columns = {name: data[j, start : start + n] for j, name in enumerate(names)}
+            check_recording(file, columns, required, fs)
 
 
 # --- manifests ----------------------------------------------------------------------------------
