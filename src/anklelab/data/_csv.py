@@ -135,7 +135,7 @@ def _slow(path: object, data: bytes, names: list[str]) -> tuple[NDArray[np.float
             lines.append(line)
     except csv.Error as exc:
         raise SessionFormatError(
-            f"{path}: line {reader.line_num + 1}: {exc}; expected comma-separated numbers"
+            f"{path}: line {max(reader.line_num, 1)}: {exc}; expected comma-separated numbers"
         ) from None
     return np.array(rows, dtype=np.float64).reshape(-1, len(names)).T.copy(), lines
 

@@ -53,22 +53,24 @@ def file_kind(path: Path) -> str:
     return _kind(os.stat(path).st_mode)
 
 
-def _inside(path: Path, root: Path) -> Path:
-    """``path`` with every link resolved; refused if that leaves ``root``."""
-    real = Path(os.path.realpath(path))
-    if not real.is_relative_to(os.path.realpath(root)):
-        raise SessionFormatError(
-            f"{path}: is a link to {excerpt(str(real), 80)}, outside the session directory "
-            f"{root}; links may only point to files inside the session"
-        )
-    return real
+def _outside(path: Path, root: Path) -> str | None:
+    """Why ``path`` (every link resolved) lies outside ``root``, or ``None``."""
+    real = os.path.realpath(path)
+    if Path(real).is_relative_to(os.path.realpath(root)):
+        return None
+    return (
+        f"is a link to {excerpt(real, 200)}, outside the session directory {root}; links may "
+        "only point to files inside the session"
+    )
 
 
 def file_problem(path: Path, root: Path) -> str | None:
     """What keeps ``path`` from being read as a regular file inside ``root`` ("does not exist",
     "is a named pipe (FIFO), not a regular file", ...), or ``None``."""
+    if outside := _outside(path, root):
+        return outside
     try:
-        mode = os.stat(_inside(path, root)).st_mode
+        mode = os.stat(path).st_mode
     except FileNotFoundError:
         return "is a dangling symbolic link" if path.is_symlink() else "does not exist"
     if not stat.S_ISREG(mode):
@@ -85,9 +87,10 @@ def read_bytes(path: Path, root: Path, limit: int, expected: str = "a CSV file")
         The file is missing, not a regular file, a link leaving ``root``, unreadable, or larger
         than ``limit`` (checked before reading).
     """
-    real = _inside(path, root)
+    if outside := _outside(path, root):
+        raise SessionFormatError(f"{path}: {outside}")
     try:
-        fd = os.open(real, os.O_RDONLY | os.O_NONBLOCK | os.O_CLOEXEC)
+        fd = os.open(os.path.realpath(path), os.O_RDONLY | os.O_NONBLOCK | os.O_CLOEXEC)
     except FileNotFoundError:
         dangling = path.is_symlink()
         raise SessionFormatError(

@@ -195,7 +195,7 @@ def _read_manifest(
             row = {n: f.strip() for n, f in zip(names, fields, strict=True)}
             rows.append((f"line {table.line_num}", row))
     except csv.Error as exc:
-        raise SessionFormatError(f"{path}: line {table.line_num + 1}: {exc}") from None
+        raise SessionFormatError(f"{path}: line {max(table.line_num, 1)}: {exc}") from None
     if not rows:
         raise SessionFormatError(f"{path}: no rows after the header; expected one row per file")
     return rows
