@@ -113,9 +113,9 @@ def format_bytes(n: int) -> str:
 def _number(data: Mapping[str, Any], key: str, where: str, *, positive: bool) -> float:
     value = data.get(key)
     if isinstance(value, bool) or not isinstance(value, int | float) or not math.isfinite(value):
-        raise SessionFormatError(f"{where}{key}: expected a finite number, got {value!r}")
+        raise SessionFormatError(f"{where}{key}: expected a finite number, got {excerpt(value)}")
     if positive and value <= 0:
-        raise SessionFormatError(f"{where}{key}: expected a number > 0, got {value!r}")
+        raise SessionFormatError(f"{where}{key}: expected a number > 0, got {excerpt(value)}")
     return float(value)
 
 
@@ -126,7 +126,7 @@ def _table(data: Mapping[str, Any], key: str, origin: str, prefix: str) -> dict[
             f"{origin}: {prefix}{key}: required table is missing{did_you_mean(key, data)}"
         )
     if not isinstance(table, Mapping):
-        raise SessionFormatError(f"{origin}: {prefix}{key}: expected a table, got {table!r}")
+        raise SessionFormatError(f"{origin}: {prefix}{key}: expected a table, got {excerpt(table)}")
     return dict(table)
 
 
@@ -154,16 +154,17 @@ def info_from_mapping(data: Mapping[str, Any], origin: str, prefix: str = "") ->
     where = f"{origin}: {prefix}"
     fmt = data.get("format")
     if fmt != SESSION_FORMAT:
-        raise SessionFormatError(f"{where}format: expected {SESSION_FORMAT!r}, got {fmt!r}")
+        raise SessionFormatError(f"{where}format: expected {SESSION_FORMAT!r}, got {excerpt(fmt)}")
     platform = data.get("platform")
     if platform not in PLATFORMS:
         raise SessionFormatError(
-            f"{where}platform: unknown platform {platform!r}; expected one of {sorted(PLATFORMS)}"
+            f"{where}platform: unknown platform {excerpt(platform)}; expected one of "
+            f"{sorted(PLATFORMS)}"
         )
     fs = _number(data, "sample_rate_hz", where, positive=True)
     subject = data.get("subject")
     if not isinstance(subject, str):
-        raise SessionFormatError(f"{where}subject: expected a string, got {subject!r}")
+        raise SessionFormatError(f"{where}subject: expected a string, got {excerpt(subject)}")
     plate = _table(data, "force_plate", origin, prefix)
     known = PlateGeometry.model_fields
     try:
@@ -365,7 +366,7 @@ def check_walking_row(where: str, perturbed: bool, direction: str, delay_ms: flo
     """Consistency of one manifest row; ``where`` names the file and row."""
     if direction not in DIRECTIONS:
         raise SessionFormatError(
-            f"{where}, column 'direction': got {direction!r}; expected one of "
+            f"{where}, column 'direction': got {excerpt(direction)}; expected one of "
             f"{', '.join(DIRECTIONS)}"
         )
     if perturbed:
@@ -383,7 +384,7 @@ def check_walking_row(where: str, perturbed: bool, direction: str, delay_ms: flo
         if direction != "none":
             raise SessionFormatError(
                 f"{where}, column 'direction': an unperturbed trial (perturbed = 0) needs "
-                f"'none', got {direction!r}"
+                f"'none', got {excerpt(direction)}"
             )
         if not math.isnan(delay_ms):
             raise SessionFormatError(
@@ -398,7 +399,7 @@ def check_unique(items: Iterable[tuple[Any, str]], what: str, file: str) -> None
     for value, where in items:
         if value in seen:
             raise SessionFormatError(
-                f"{file}: {where}: duplicate {what} {value!r} (already at {seen[value]}); "
+                f"{file}: {where}: duplicate {what} {excerpt(value)} (already at {seen[value]}); "
                 f"expected each {what} once"
             )
         seen[value] = where

@@ -25,6 +25,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from anklelab._atomic import atomic_directory
+from anklelab.data._checks import excerpt
 from anklelab.data._files import MAX_JSON_BYTES
 from anklelab.data.directory import (
     SessionReader,
@@ -89,10 +90,12 @@ def _session_toml(reader: SessionReader) -> float:
     expected = {"format": SESSION_FORMAT, "platform": "capstan"}
     for key, value in expected.items():
         if meta.get(key) != value:
-            raise SessionFormatError(f"{file}: {key} = {meta.get(key)!r}; expected {value!r}")
+            raise SessionFormatError(
+                f"{file}: {key} = {excerpt(meta.get(key))}; expected {value!r}"
+            )
     fs = meta.get("sample_rate_hz")
     if isinstance(fs, bool) or not isinstance(fs, int | float) or not fs > 0:
-        raise SessionFormatError(f"{file}: sample_rate_hz = {fs!r}; expected a number > 0")
+        raise SessionFormatError(f"{file}: sample_rate_hz = {excerpt(fs)}; expected a number > 0")
     return float(fs)
 
 
