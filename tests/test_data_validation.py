@@ -296,6 +296,34 @@ CASES = [
         r"session\.toml: geometry\.ankle_height_m: expected a number > 0",
     ),
     (
+        "heel-to-ankle in centimetres",
+        lambda d: replace(d / "session.toml", "heel_to_ankle_m = 0.04", "heel_to_ankle_m = 4.0"),
+        r"s/session\.toml: geometry\.heel_to_ankle_m = 4 m: did you give centimetres\? "
+        r"expected 0–0\.25 m",
+    ),
+    (
+        "ankle height in millimetres",
+        lambda d: replace(d / "session.toml", "ankle_height_m = 0.08", "ankle_height_m = 80"),
+        r"s/session\.toml: geometry\.ankle_height_m = 80 m: did you give millimetres\? "
+        r"expected 0\.02–0\.25 m",
+    ),
+    (
+        "plate offset in centimetres",
+        lambda d: replace(d / "session.toml", "a_m = 0.12", "a_m = 12.0"),
+        r"s/session\.toml: force_plate\.a_m = 12 m: did you give centimetres\?",
+    ),
+    (
+        "implausible without a unit slip",
+        lambda d: replace(d / "session.toml", "heel_to_ankle_m = 0.04", "heel_to_ankle_m = -0.3"),
+        r"s/session\.toml: geometry\.heel_to_ankle_m = -0\.3 m; expected 0–0\.25 m",
+    ),
+    (
+        "capstan platform in a walking session",
+        lambda d: replace(d / "session.toml", '"perturberator"', '"capstan"'),
+        r"s/session\.toml: platform: 'capstan' does not record walking sessions; expected "
+        r"one of 'perturberator'",
+    ),
+    (
         "subject not text",
         lambda d: replace(d / "session.toml", 'subject = "S01"', "subject = 1"),
         r"session\.toml: subject: expected a string, got 1",

@@ -36,7 +36,9 @@ from anklelab.forceplate import PlateGeometry
 
 __all__ = [
     "MAX_STEP_JITTER",
+    "PLAUSIBLE_M",
     "RATE_TOLERANCE",
+    "SESSION_PLATFORMS",
     "RowLabel",
     "check_bench_tests",
     "check_columns",
@@ -61,6 +63,18 @@ MAX_STEP_JITTER = 0.5
 """Largest deviation of any single time step from ``1 / sample_rate_hz``, as a fraction of it."""
 
 _GEOMETRY_KEYS = ("ankle_height_m", "heel_to_ankle_m")
+SESSION_PLATFORMS = ("perturberator",)
+"""Platforms whose sessions hold walking trials (the capstan platform's identification data
+is a directory of its own)."""
+PLAUSIBLE_M = {
+    "geometry.ankle_height_m": (0.02, 0.25),
+    "geometry.heel_to_ankle_m": (0.0, 0.25),
+    "force_plate.a_m": (0.01, 1.0),
+    "force_plate.b_m": (0.01, 1.0),
+    "force_plate.az0_m": (-0.2, 0.0),
+}
+"""Physically plausible range (m) of each length in ``session.toml``; outside it, the value is
+refused with a hint when it fits in centimetres or millimetres."""
 
 
 def sample_label(index: int) -> str:
@@ -119,6 +133,24 @@ def _number(data: Mapping[str, Any], key: str, where: str, *, positive: bool) ->
     return float(value)
 
 
+def _plausible(value: float, key: str, where: str) -> None:
+    """Refuse a length outside :data:`PLAUSIBLE_M`, hinting at the unit it fits in."""
+    low, high = PLAUSIBLE_M[key]
+    if low <= value <= high:
+        return
+    hint = next(
+        (
+            f": did you give {unit}? "
+            for factor, unit in ((100, "centimetres"), (1000, "millimetres"))
+            if low <= value / factor <= high
+        ),
+        "; ",
+    )
+    raise SessionFormatError(
+        f"{where}{key} = {value:g} m{hint}expected {low:g}–{high:g} m (lengths are in metres)"
+    )
+
+
 def _table(data: Mapping[str, Any], key: str, origin: str, prefix: str) -> dict[str, Any]:
     table = data.get(key)
     if table is None:
@@ -161,6 +193,12 @@ def info_from_mapping(data: Mapping[str, Any], origin: str, prefix: str = "") ->
             f"{where}platform: unknown platform {excerpt(platform)}; expected one of "
             f"{sorted(PLATFORMS)}"
         )
+    if platform not in SESSION_PLATFORMS:
+        raise SessionFormatError(
+            f"{where}platform: {platform!r} does not record walking sessions; expected one of "
+            f"{', '.join(map(repr, SESSION_PLATFORMS))} (a {platform} identification directory "
+            "is read by `anklelab identify friction`)"
+        )
     fs = _number(data, "sample_rate_hz", where, positive=True)
     subject = data.get("subject")
     if not isinstance(subject, str):
@@ -186,6 +224,12 @@ def info_from_mapping(data: Mapping[str, Any], origin: str, prefix: str = "") ->
             )
     ankle_height = _number(geometry, "ankle_height_m", f"{where}geometry.", positive=True)
     heel_to_ankle = _number(geometry, "heel_to_ankle_m", f"{where}geometry.", positive=False)
+    lengths = {
+        "geometry.ankle_height_m": ankle_height,
+        "geometry.heel_to_ankle_m": heel_to_ankle,
+    } | {f"force_plate.{k}": getattr(geometry_plate, k) for k in ("a_m", "b_m", "az0_m")}
+    for key, value in lengths.items():
+        _plausible(value, key, where)
     extra = {
         k: v
         for k, v in data.items()
