@@ -1,30 +1,23 @@
 """Estimators: impulse-response filters, 2nd-order impedance, bench stiffness."""
 
-from anklelab.ident.bench import BenchStiffness, bench_stiffness, interpolate_stiffness
-from anklelab.ident.friction import FrictionIdentifier, SpindownFit, read_friction_json
-from anklelab.ident.impedance import (
-    ImpedanceFit,
-    ImpedanceModel,
-    StiffnessModel,
-    fit_impedance,
-    impedance_torque,
-)
-from anklelab.ident.irf import FILTERS_FORMAT, INPUTS, ImpulseResponse, PlatformFilters
+from anklelab._lazy import lazy_exports
 
-__all__ = [
-    "FILTERS_FORMAT",
-    "INPUTS",
-    "BenchStiffness",
-    "FrictionIdentifier",
-    "ImpedanceFit",
-    "ImpedanceModel",
-    "ImpulseResponse",
-    "PlatformFilters",
-    "SpindownFit",
-    "StiffnessModel",
-    "bench_stiffness",
-    "fit_impedance",
-    "impedance_torque",
-    "interpolate_stiffness",
-    "read_friction_json",
-]
+_EXPORTS = {
+    "BenchStiffness": "bench",
+    "bench_stiffness": "bench",
+    "interpolate_stiffness": "bench",
+    "FrictionIdentifier": "friction",
+    "SpindownFit": "friction",
+    "read_friction_json": "friction",
+    "ImpedanceFit": "impedance",
+    "ImpedanceModel": "impedance",
+    "StiffnessModel": "impedance",
+    "fit_impedance": "impedance",
+    "impedance_torque": "impedance",
+    "FILTERS_FORMAT": "irf",
+    "INPUTS": "irf",
+    "ImpulseResponse": "irf",
+    "PlatformFilters": "irf",
+}
+__all__ = sorted(_EXPORTS)
+__getattr__, __dir__ = lazy_exports(__name__, _EXPORTS)
