@@ -36,7 +36,17 @@ from benchmarks._harness import Result
 BASELINE_COMMIT = "3e2fe21f78751839c297db96922e90c9839a452e"
 """main just before the fast path (HDF5 layout, pyarrow CSV, lazy imports) was merged."""
 REPEAT = 3
-CLI = "from anklelab.cli import run; run()"
+# the child reports its own peak resident memory (VmHWM: this program's, reset by exec, unlike
+# ru_maxrss, which keeps the parent's size at the fork)
+CLI = (
+    "import atexit, os, re\n"
+    "def peak():\n"
+    "    status = open('/proc/self/status').read()\n"
+    "    os.write(2, ('\\nPEAK_KIB ' + re.search(r'VmHWM:\\s+(\\d+)', status)[1]).encode())\n"
+    "atexit.register(peak)\n"
+    "from anklelab.cli import run\n"
+    "run()\n"
+)
 
 
 def _baseline_src(tmp: Path) -> Path | None:
@@ -63,15 +73,15 @@ def _run(argv: list[str], src: Path | None, clean: Path | None = None) -> tuple[
     env = dict(os.environ) | ({"PYTHONPATH": str(src)} if src else {})
     with tempfile.TemporaryFile() as errors:
         start = time.perf_counter()
-        proc = subprocess.Popen(
+        status = subprocess.run(
             [sys.executable, "-c", CLI, *argv], env=env, stdout=subprocess.DEVNULL, stderr=errors
-        )
-        _, status, usage = os.wait4(proc.pid, 0)
+        ).returncode
         wall = time.perf_counter() - start
-        if status:
-            errors.seek(0)
-            raise RuntimeError(f"{' '.join(argv)} failed: {errors.read().decode()[-2000:]}")
-    return wall, usage.ru_maxrss / 1024
+        errors.seek(0)
+        text = errors.read().decode(errors="replace")
+    if status:
+        raise RuntimeError(f"{' '.join(argv)} failed: {text[-2000:]}")
+    return wall, int(text.rsplit("PEAK_KIB ", 1)[1]) / 1024
 
 
 def _best(argv: list[str], src: Path | None, clean: Path | None = None) -> tuple[float, float]:
