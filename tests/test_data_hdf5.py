@@ -383,3 +383,27 @@ def test_fuzz_damaged_files_give_session_format_errors(pristine, kind, where, ch
         read_hdf5(path)
     except SessionFormatError as exc:
         assert str(path) in str(exc) and "\n" not in str(exc)
+
+
+@pytest.mark.parametrize(
+    ("change", "pattern"),
+    [
+        (
+            lambda s: {"walking": (replace(s.walking[0], extra={"note": "a\x00"}), *s.walking[1:])},
+            r"session\.walking\[0\] 'trial_0001\.csv': extra manifest field 'note' = 'a\\x00'",
+        ),
+        (
+            lambda s: {
+                "bench": (
+                    replace(s.bench[0], recording=replace(s.bench[0].recording, name="b\x00")),
+                    *s.bench[1:],
+                )
+            },
+            r"session\.bench\[0\] 'b\\x00': recording name 'b\\x00'; expected non-empty text",
+        ),
+    ],
+)
+def test_writer_refuses_text_the_store_cannot_hold(tmp_path, session, change, pattern):
+    with pytest.raises(SessionFormatError, match=pattern):
+        save_session(replace(session, **change(session)), tmp_path / "s.h5")
+    assert list(tmp_path.iterdir()) == []

@@ -16,7 +16,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from anklelab._params import did_you_mean, parameters_from_mapping
-from anklelab.data._tree import canonical
+from anklelab.data._tree import canonical, storable
 from anklelab.data.session import (
     BENCH_COLUMNS,
     BENCH_MANIFEST_COLUMNS,
@@ -476,21 +476,42 @@ def check_bench_tests(file: str, tests: Iterable[tuple[BenchTest, str]]) -> None
 # --- whole sessions (before writing) ------------------------------------------------------------
 
 
+def _plain_text(text: object) -> bool:
+    """Non-empty text every store can hold, without surrounding spaces or line breaks."""
+    return (
+        isinstance(text, str)
+        and bool(text)
+        and text == text.strip()
+        and "\n" not in text
+        and storable(text)
+    )
+
+
 def _check_names(where: str, recording: Recording) -> None:
+    if not _plain_text(recording.name):
+        raise SessionFormatError(
+            f"{where}: recording name {excerpt(recording.name)}; expected non-empty text "
+            "without surrounding spaces, line breaks or NUL characters"
+        )
     for name in recording.columns:
-        if not isinstance(name, str) or not name or name != name.strip() or "\n" in name:
+        if not _plain_text(name):
             raise SessionFormatError(
-                f"{where}: column name {name!r}; expected non-empty text without surrounding "
-                "spaces or line breaks"
+                f"{where}: column name {excerpt(name)}; expected non-empty text without "
+                "surrounding spaces, line breaks or NUL characters"
             )
 
 
 def _check_extra(where: str, extra: Mapping[str, str], reserved: tuple[str, ...]) -> None:
     for key, value in extra.items():
-        if key in reserved or not isinstance(value, str):
+        if (
+            key in reserved
+            or not _plain_text(key)
+            or not isinstance(value, str)
+            or not storable(value)
+        ):
             raise SessionFormatError(
-                f"{where}: extra manifest field {key!r} = {value!r}; expected a text value under "
-                f"a name other than {', '.join(reserved)}"
+                f"{where}: extra manifest field {excerpt(key)} = {excerpt(value)}; expected a "
+                f"text value under a name other than {', '.join(reserved)}"
             )
 
 
@@ -506,12 +527,12 @@ def validate_session(session: Session, origin: str = "session") -> None:
             raise SessionFormatError(f"{origin}.{name}: {exc}") from None
     fs = session.info.sample_rate_hz
     for i, rec in enumerate(session.calibration):
-        where = f"{origin}.calibration[{i}] {rec.name!r}"
+        where = f"{origin}.calibration[{i}] {excerpt(rec.name)}"
         _check_names(where, rec)
         check_recording(where, rec.columns, CALIBRATION_COLUMNS, fs)
     labelled = []
     for i, trial in enumerate(session.walking):
-        where = f"{origin}.walking[{i}] {trial.recording.name!r}"
+        where = f"{origin}.walking[{i}] {excerpt(trial.recording.name)}"
         check_walking_row(where, trial.perturbed, trial.direction, trial.delay_ms)
         _check_names(where, trial.recording)
         _check_extra(where, trial.extra, WALKING_MANIFEST_COLUMNS)
@@ -519,7 +540,7 @@ def validate_session(session: Session, origin: str = "session") -> None:
         labelled.append((trial, f"walking[{i}]"))
     check_walking_trials(f"{origin}.walking", labelled)
     for i, test in enumerate(session.bench):
-        where = f"{origin}.bench[{i}] {test.recording.name!r}"
+        where = f"{origin}.bench[{i}] {excerpt(test.recording.name)}"
         _check_names(where, test.recording)
         _check_extra(where, test.extra, BENCH_MANIFEST_COLUMNS)
         check_recording(where, test.recording.columns, BENCH_COLUMNS, fs)

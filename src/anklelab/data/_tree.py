@@ -36,6 +36,7 @@ __all__ = [
     "h5_scalar",
     "link_name",
     "read_h5_tree",
+    "storable",
     "to_json",
     "tree_differences",
     "unlink_name",
@@ -57,13 +58,13 @@ def canonical(tree: Mapping[str, Any], path: str = "") -> dict[str, Any]:
         raise ValueError(f"{path or 'tree'}: expected a mapping, got {type(tree).__name__}")
     out = {}
     for key, value in tree.items():
-        if not isinstance(key, str) or not key or not _storable(key):
+        if not isinstance(key, str) or not key or not storable(key):
             raise ValueError(f"{path}{key!r}: keys must be non-empty UTF-8 strings without NUL")
         out[key] = _value(value, f"{path}{key}")
     return out
 
 
-def _storable(text: str) -> bool:
+def storable(text: str) -> bool:
     """Whether HDF5, JSON and TOML files can all hold ``text`` (UTF-8, no NUL)."""
     try:
         text.encode("utf-8")
@@ -75,7 +76,7 @@ def _storable(text: str) -> bool:
 def _value(value: Any, path: str) -> Any:
     if isinstance(value, Mapping):
         return canonical(value, path + ".")
-    if isinstance(value, str) and not _storable(value):
+    if isinstance(value, str) and not storable(value):
         raise ValueError(f"{path}: text must be UTF-8 without NUL characters to be stored")
     if value is None or isinstance(value, bool | str):
         return value

@@ -131,9 +131,7 @@ def _write_column(group: h5py.Group, name: str, values: Sequence[str] | np.ndarr
         data = values
     else:
         encoded = [v.encode("utf-8") for v in values]
-        data = np.array(
-            encoded, dtype=h5py.string_dtype("utf-8", max(map(len, encoded), default=1))
-        )
+        data = np.array(encoded, dtype=h5py.string_dtype("utf-8", max([1, *map(len, encoded)])))
     checked = {"chunks": data.shape, "fletcher32": True} if data.size else {}
     group.create_dataset(name, data=data, track_times=False, **checked)
 
