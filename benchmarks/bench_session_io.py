@@ -19,6 +19,7 @@ import argparse
 import dataclasses
 import io
 import os
+import resource
 import shutil
 import subprocess
 import sys
@@ -65,12 +66,13 @@ def _baseline_src(tmp: Path) -> Path | None:
     return tmp / "baseline" / "src"
 
 
-def _run(argv: list[str], src: Path | None, clean: Path | None = None) -> tuple[float, float]:
-    """Wall time (s) and peak RSS (MiB) of one ``anklelab`` process (``src`` on PYTHONPATH
-    selects the baseline); ``clean`` is removed first (an output directory)."""
+def _run(argv: list[str], src: Path | None, clean: Path | None = None) -> tuple[float, ...]:
+    """Wall time (s), CPU time (user + system, s) and peak RSS (MiB) of one ``anklelab`` process
+    (``src`` on PYTHONPATH selects the baseline); ``clean`` is removed first."""
     if clean is not None:
         shutil.rmtree(clean, ignore_errors=True)
     env = dict(os.environ) | ({"PYTHONPATH": str(src)} if src else {})
+    before = resource.getrusage(resource.RUSAGE_CHILDREN)
     with tempfile.TemporaryFile() as errors:
         start = time.perf_counter()
         status = subprocess.run(
@@ -79,14 +81,17 @@ def _run(argv: list[str], src: Path | None, clean: Path | None = None) -> tuple[
         wall = time.perf_counter() - start
         errors.seek(0)
         text = errors.read().decode(errors="replace")
+    after = resource.getrusage(resource.RUSAGE_CHILDREN)
     if status:
         raise RuntimeError(f"{' '.join(argv)} failed: {text[-2000:]}")
-    return wall, int(text.rsplit("PEAK_KIB ", 1)[1]) / 1024
+    cpu = after.ru_utime + after.ru_stime - before.ru_utime - before.ru_stime
+    return wall, cpu, int(text.rsplit("PEAK_KIB ", 1)[1]) / 1024
 
 
-def _best(argv: list[str], src: Path | None, clean: Path | None = None) -> tuple[float, float]:
+def _best(argv: list[str], src: Path | None, clean: Path | None = None) -> tuple[float, ...]:
+    """Best wall time, best CPU time and largest peak memory of :data:`REPEAT` runs."""
     runs = [_run(argv, src, clean) for _ in range(REPEAT)]
-    return min(w for w, _ in runs), max(m for _, m in runs)
+    return tuple(f(r[k] for r in runs) for k, f in enumerate((min, min, max)))
 
 
 def _tiled(session: Session, copies: int) -> Session:
@@ -163,32 +168,23 @@ def run(scale: int = 1) -> list[Result]:
             )
     label = f"{n} walking trials, {data_mib:.0f} MiB of numbers"
     what = f"anklelab at {BASELINE_COMMIT[:7]} (before the fast path)"
+    titles = {
+        "read h5": "session info S.h5 (read the HDF5 store)",
+        "read dir": "session info DIR (read the CSV directory)",
+        "import": "import DIR --out S.h5",
+        "analyze": "analyze S.h5 (figures included)",
+    }
     results = []
-    for key, title in (
-        ("read h5", "session info S.h5 (read the HDF5 store)"),
-        ("read dir", "session info DIR (read the CSV directory)"),
-        ("import", "import DIR --out S.h5"),
-        ("analyze", "analyze S.h5 (figures included)"),
-    ):
-        ours, base = rows[key]["ours"], rows[key]["baseline"]
-        results.append(Result(f"{title}, {label}", ours[0], base[0], what))
-    both = [sum(rows[k][v][0] for k in ("import", "analyze")) for v in ("ours", "baseline")]
-    results.append(Result(f"import + analyze of the CSV directory, {label}", *both, what))
-    for key, title in (
-        ("read h5", "session info S.h5"),
-        ("import", "import"),
-        ("analyze", "analyze"),
-    ):
-        ours, base = rows[key]["ours"], rows[key]["baseline"]
-        results.append(
-            Result(
-                f"peak memory: {title} ({ours[1] / data_mib:.1f}x the data)",
-                ours[1],
-                base[1],
-                what,
-                unit="MiB",
-            )
-        )
+    for index, kind in ((0, "wall"), (1, "CPU")):
+        for key, title in titles.items():
+            ours, base = rows[key]["ours"][index], rows[key]["baseline"][index]
+            results.append(Result(f"{title}, {kind}, {label}", ours, base, what))
+        both = [sum(rows[k][v][index] for k in ("import", "analyze")) for v in ("ours", "baseline")]
+        results.append(Result(f"import + analyze of the CSV directory, {kind}", *both, what))
+    for key in ("read h5", "read dir", "import", "analyze"):
+        ours, base = rows[key]["ours"][2], rows[key]["baseline"][2]
+        name = f"peak memory: {titles[key].split(' (')[0]} ({ours / data_mib:.1f}x the data)"
+        results.append(Result(name, ours, base, what, unit="MiB"))
     return results
 
 

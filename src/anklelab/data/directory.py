@@ -80,8 +80,6 @@ from anklelab.data.session import (
 )
 from anklelab.errors import SessionFormatError
 
-_WORKERS = min(4, os.cpu_count() or 1)
-
 __all__ = [
     "SessionReader",
     "directory_hash",
@@ -92,6 +90,9 @@ __all__ = [
     "write_directory",
 ]
 
+
+_WORKERS = min(4, os.cpu_count() or 1)
+"""Threads parsing recording files at once (pyarrow parses without holding the GIL)."""
 
 # --- reading ------------------------------------------------------------------------------------
 
@@ -346,10 +347,15 @@ class _Plan:
         ]
 
 
-def _plan(reader: SessionReader) -> _Plan:
-    root = reader.root
+def _reader(path: str | Path) -> SessionReader:
+    root = Path(path)
     if not root.is_dir():
         raise SessionFormatError(f"{root}: not a directory; expected a session directory")
+    return SessionReader(root)
+
+
+def _plan(reader: SessionReader) -> _Plan:
+    root = reader.root
     toml = root / "session.toml"
     calibration = sorted((root / "calibration").glob("*.csv"), key=_natural)
     for path in calibration:
@@ -370,14 +376,14 @@ def directory_hash(path: str | Path) -> str:
     the calibration files, the walking manifest and its files, the bench manifest and its files,
     ``truth.json`` and ``provenance.json``; each as its path relative to the session and the
     SHA-256 of its bytes. Files the reader ignores do not count."""
-    reader = SessionReader(Path(path))
+    reader = _reader(path)
     plan = _plan(reader)
     return reader.sha256(plan.files(reader.root))
 
 
 def _read_directory(path: str | Path, progress: Progress | None) -> tuple[Session, str]:
     """The session and the SHA-256 of every file read (:func:`directory_hash`)."""
-    reader = SessionReader(Path(path))
+    reader = _reader(path)
     info = info_from_mapping(
         read_session_toml(reader, reader.root / "session.toml"), str(reader.root / "session.toml")
     )
@@ -390,13 +396,19 @@ def _read_directory(path: str | Path, progress: Progress | None) -> tuple[Sessio
     ]
     tick = ticker(progress, len(jobs))
     with ThreadPoolExecutor(max_workers=_WORKERS) as pool:  # pyarrow parses without the GIL
-        trees = {name: pool.submit(_json_tree, reader, p) for name, p in plan.trees.items()}
-        recordings = []
-        for recording in pool.map(lambda job: read_csv_recording(*job, fs, reader=reader), jobs):
-            recordings.append(recording)
-            tick()
-        truth = trees["truth"].result() if "truth" in trees else None
-        provenance = trees["provenance"].result() if "provenance" in trees else {}
+        try:
+            trees = {name: pool.submit(_json_tree, reader, p) for name, p in plan.trees.items()}
+            recordings = []
+            for recording in pool.map(
+                lambda job: read_csv_recording(*job, fs, reader=reader), jobs
+            ):
+                recordings.append(recording)
+                tick()
+            truth = trees["truth"].result() if "truth" in trees else None
+            provenance = trees["provenance"].result() if "provenance" in trees else {}
+        except BaseException:  # the first problem is reported without reading the rest
+            pool.shutdown(wait=False, cancel_futures=True)
+            raise
     n_cal, n_walk = len(plan.calibration), len(plan.walking)
     session = Session(
         info=info,
