@@ -229,7 +229,8 @@ def info_from_mapping(data: Mapping[str, Any], origin: str, prefix: str = "") ->
         "geometry.heel_to_ankle_m": heel_to_ankle,
     } | {f"force_plate.{k}": getattr(geometry_plate, k) for k in ("a_m", "b_m", "az0_m")}
     for key, value in lengths.items():
-        _plausible(value, key, where)
+        if value is not None:  # a plate type without this length
+            _plausible(value, key, where)
     extra = {
         k: v
         for k, v in data.items()
