@@ -4,6 +4,8 @@ import shutil
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from anklelab.data import load_session, read_directory, save_session
 from anklelab.data._synthetic import random_session
@@ -460,3 +462,49 @@ def test_writers_check_trees_names_and_extras(tmp_path, change, pattern):
     with pytest.raises(SessionFormatError, match=pattern):
         save_session(dc_replace(s, **change(s)), tmp_path / "out.h5")
     assert list(tmp_path.iterdir()) == []
+
+
+TOML_VALUES = st.recursive(
+    st.none().map(lambda _: "x")
+    | st.booleans()
+    | st.integers(-(2**63), 2**63 - 1)
+    | st.floats()
+    | st.text(st.characters(exclude_categories=["Cs"]), max_size=30),
+    lambda inner: (
+        st.lists(inner, max_size=3) | st.dictionaries(st.text(max_size=5), inner, max_size=3)
+    ),
+    max_leaves=8,
+)
+
+
+@settings(max_examples=150, deadline=None)
+@given(
+    key=st.sampled_from(
+        [
+            ("format",),
+            ("platform",),
+            ("sample_rate_hz",),
+            ("subject",),
+            ("force_plate",),
+            ("force_plate", "a_m"),
+            ("force_plate", "az0_m"),
+            ("force_plate", "anterior_axis"),
+            ("geometry",),
+            ("geometry", "heel_to_ankle_m"),
+            ("extra",),
+        ]
+    ),
+    value=TOML_VALUES,
+)
+def test_any_session_toml_value_is_accepted_or_named(key, value):
+    from anklelab.data._checks import info_from_mapping, info_to_mapping
+
+    document = info_to_mapping(random_session().info)
+    table = document
+    for part in key[:-1]:
+        table = table[part]
+    table[key[-1]] = value
+    try:
+        info_from_mapping(document, "session.toml")
+    except SessionFormatError as exc:
+        assert str(exc).startswith("session.toml: ") and len(str(exc)) < 600

@@ -185,10 +185,10 @@ def info_from_mapping(data: Mapping[str, Any], origin: str, prefix: str = "") ->
         raise SessionFormatError(f"{origin}: {prefix}{exc}") from None
     where = f"{origin}: {prefix}"
     fmt = data.get("format")
-    if fmt != SESSION_FORMAT:
+    if not isinstance(fmt, str) or fmt != SESSION_FORMAT:
         raise SessionFormatError(f"{where}format: expected {SESSION_FORMAT!r}, got {excerpt(fmt)}")
     platform = data.get("platform")
-    if platform not in PLATFORMS:
+    if not isinstance(platform, str) or platform not in PLATFORMS:
         raise SessionFormatError(
             f"{where}platform: unknown platform {excerpt(platform)}; expected one of "
             f"{sorted(PLATFORMS)}"

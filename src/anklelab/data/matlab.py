@@ -126,7 +126,7 @@ def _h5_value(
             for i in range(count)
         ]
         return elements[0] if count == 1 else elements
-    if item.attrs.get("MATLAB_empty", 0):
+    if np.asarray(item.attrs.get("MATLAB_empty", 0)).any():
         return "" if cls == "char" else np.empty(0)
     data = np.asarray(item[()]).T  # HDF5 stores MATLAB arrays transposed
     if cls == "char":
