@@ -121,3 +121,11 @@ def test_save_refuses_to_replace_unrelated_directory(tmp_path):
     with pytest.raises(FileExistsError, match=r"session\.toml"):
         save_session(random_session(), tmp_path / "precious", format="dir")
     assert (tmp_path / "precious" / "thesis.tex").exists()
+
+
+def test_sessions_remember_where_they_were_read_from(tmp_path):
+    s = random_session()
+    assert s.source == ""
+    for path in (save_session(s, tmp_path / "d", format="dir"), save_session(s, tmp_path / "s.h5")):
+        back = load_session(path)
+        assert back.source == str(path) and back == replace(back, source="elsewhere")

@@ -166,4 +166,5 @@ def read_v1(f: h5py.File, path: Path, progress: Progress | None) -> Session:
         bench=tuple(b for b, _ in bench),
         truth=truth,
         provenance=provenance,
+        source=str(path),
     )

@@ -423,6 +423,7 @@ def _read_directory(path: str | Path, progress: Progress | None) -> tuple[Sessio
         ),
         truth=truth,
         provenance=provenance,
+        source=str(reader.root),
     )
     return session, reader.sha256(plan.files(reader.root))
 

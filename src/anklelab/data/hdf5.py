@@ -554,6 +554,7 @@ def _read_v2(f: h5py.File, path: Path, progress: Progress | None) -> Session:
         bench=tuple(b for b, _ in bench),
         truth=truth,
         provenance=provenance,
+        source=str(path),
     )
 
 

@@ -337,4 +337,5 @@ def read_matlab(path: str | Path, *, progress: Progress | None = None) -> Sessio
         calibration=tuple(calibration),
         walking=tuple(t for t, _ in walking),
         bench=tuple(b for b, _ in bench),
+        source=str(path),
     )

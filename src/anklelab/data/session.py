@@ -158,6 +158,11 @@ class Session:
         (the twin's parameters, true time courses and reference values).
     provenance : mapping
         ``anklelab_version``, ``settings``, ``source_sha256`` and the like.
+    source : str
+        Where the session was read from, as the user named it (``"s"``, ``"s.h5"``), for
+        messages that name its files (``f"{session.source}/walking/trials.csv"``); empty for a
+        session built in memory. Not part of the session's content (equality and
+        :func:`~anklelab.data.diff_sessions` ignore it).
     """
 
     info: SessionInfo
@@ -166,3 +171,4 @@ class Session:
     bench: tuple[BenchTest, ...] = ()
     truth: Mapping[str, Any] | None = None
     provenance: Mapping[str, Any] = field(default_factory=dict)
+    source: str = field(default="", compare=False)
