@@ -450,7 +450,7 @@ def _recordings(
 def _extra(text: str, where: str) -> dict[str, str]:
     try:
         extra = json.loads(text)
-    except json.JSONDecodeError:
+    except (json.JSONDecodeError, TypeError):
         extra = None
     if not isinstance(extra, dict) or not all(isinstance(v, str) for v in extra.values()):
         raise SessionFormatError(
@@ -463,6 +463,61 @@ def _labels(values: Any, where: str, column: str) -> list[int | str]:
     if not isinstance(values, tuple):
         raise SessionFormatError(f"{where}/manifest/{column}: expected text labels")
     return [label_from_text(v) for v in values]
+
+
+def _walking(
+    where: str, manifest: dict[str, Any], recordings: list[Recording]
+) -> tuple[WalkingTrial, ...]:
+    """The walking trials of a section's manifest rows, checked."""
+    walking = []
+    for i, (recording, label, perturbed, direction, delay, extra) in enumerate(
+        zip(
+            recordings,
+            _labels(manifest["trial"], where, "trial"),
+            np.asarray(manifest["perturbed"]),
+            manifest["direction"],
+            np.asarray(manifest["delay_ms"], dtype=np.float64),
+            manifest["extra"],
+            strict=True,
+        )
+    ):
+        row = f"{where}/{recording.name}"
+        if perturbed not in (0, 1) or not isinstance(direction, str):
+            raise SessionFormatError(
+                f"{row}: manifest 'perturbed' must be 0 or 1 and 'direction' text"
+            )
+        trial = WalkingTrial(
+            label, recording, bool(perturbed), direction, float(delay), _extra(extra, row)
+        )  # type: ignore[arg-type]
+        check_walking_row(row, trial.perturbed, trial.direction, trial.delay_ms)
+        walking.append((trial, f"row {i + 1}"))
+    check_walking_trials(f"{where}/manifest", walking)
+    return tuple(t for t, _ in walking)
+
+
+def _bench(
+    where: str, manifest: dict[str, Any], recordings: list[Recording]
+) -> tuple[BenchTest, ...]:
+    """The bench tests of a section's manifest rows, checked."""
+    bench = [
+        (
+            BenchTest(
+                label, recording, float(distance), _extra(extra, f"{where}/{recording.name}")
+            ),  # type: ignore[arg-type]
+            f"row {i + 1}",
+        )
+        for i, (recording, label, distance, extra) in enumerate(
+            zip(
+                recordings,
+                _labels(manifest["test"], where, "test"),
+                np.asarray(manifest["distance_m"], dtype=np.float64),
+                manifest["extra"],
+                strict=True,
+            )
+        )
+    ]
+    check_bench_tests(f"{where}/manifest", bench)
+    return tuple(b for b, _ in bench)
 
 
 def _read_v2(f: h5py.File, path: Path, progress: Progress | None) -> Session:
@@ -501,57 +556,13 @@ def _read_v2(f: h5py.File, path: Path, progress: Progress | None) -> Session:
         for _ in sections[name]:
             tick()
 
-    manifest = stored["walking"][0]
-    where = f"{path}:/walking"
-    walking = []
-    for i, (recording, label, perturbed, direction, delay, extra) in enumerate(
-        zip(
-            sections["walking"],
-            _labels(manifest["trial"], where, "trial"),
-            np.asarray(manifest["perturbed"]),
-            manifest["direction"],
-            np.asarray(manifest["delay_ms"], dtype=np.float64),
-            manifest["extra"],
-            strict=True,
-        )
-    ):
-        row = f"{where}/{recording.name}"
-        if perturbed not in (0, 1) or not isinstance(direction, str):
-            raise SessionFormatError(
-                f"{row}: manifest 'perturbed' must be 0 or 1 and 'direction' text"
-            )
-        trial = WalkingTrial(
-            label, recording, bool(perturbed), direction, float(delay), _extra(extra, row)
-        )  # type: ignore[arg-type]
-        check_walking_row(row, trial.perturbed, trial.direction, trial.delay_ms)
-        walking.append((trial, f"row {i + 1}"))
-    check_walking_trials(f"{where}/manifest", walking)
-
-    manifest = stored["bench"][0]
-    where = f"{path}:/bench"
-    bench = [
-        (
-            BenchTest(
-                label, recording, float(distance), _extra(extra, f"{where}/{recording.name}")
-            ),  # type: ignore[arg-type]
-            f"row {i + 1}",
-        )
-        for i, (recording, label, distance, extra) in enumerate(
-            zip(
-                sections["bench"],
-                _labels(manifest["test"], where, "test"),
-                np.asarray(manifest["distance_m"], dtype=np.float64),
-                manifest["extra"],
-                strict=True,
-            )
-        )
-    ]
-    check_bench_tests(f"{where}/manifest", bench)
+    walking = _walking(f"{path}:/walking", stored["walking"][0], sections["walking"])
+    bench = _bench(f"{path}:/bench", stored["bench"][0], sections["bench"])
     return Session(
         info=info,
         calibration=tuple(sections["calibration"]),
-        walking=tuple(t for t, _ in walking),
-        bench=tuple(b for b, _ in bench),
+        walking=walking,
+        bench=bench,
         truth=truth,
         provenance=provenance,
         source=str(path),
