@@ -11,7 +11,7 @@ from hypothesis import strategies as st
 
 from anklelab.data import diff_sessions, hdf5, load_session, read_hdf5, save_session
 from anklelab.data._synthetic import random_session
-from anklelab.data._tree import create_group, link_name, write_h5_tree
+from anklelab.data._tree import create_group, link_name, read_h5_tree, write_h5_tree
 from anklelab.data.hdf5 import H5_FORMAT, label_from_text
 from anklelab.errors import SessionFormatError
 
@@ -233,7 +233,7 @@ def test_content_changed_after_writing_is_corruption(h5, edit, part):
 def test_forged_part_hash_is_caught_by_the_content_hash(h5):
     with h5py.File(h5, "a") as f:
         f["provenance"].attrs["seed"] = 1
-        f.attrs["sha256_provenance"] = hdf5.sha256_tree(hdf5.read_h5_tree(f["provenance"]))
+        f.attrs["sha256_provenance"] = hdf5.sha256_tree(read_h5_tree(f["provenance"]))
     with pytest.raises(SessionFormatError, match=r"attribute 'content_sha256' does not match"):
         load_session(h5)
 
