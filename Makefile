@@ -23,7 +23,7 @@ $(STAMP): pyproject.toml
 	touch $(STAMP)
 
 demo: $(STAMP)
-	$(BIN)/anklelab demo
+	$(BIN)/anklelab demo --force
 
 lint: $(STAMP)
 	$(BIN)/ruff check .

@@ -34,7 +34,7 @@ from anklelab.data import save_session
 from anklelab.data.session import Session
 from benchmarks._harness import Result
 
-BASELINE_COMMIT = "3e2fe21f78751839c297db96922e90c9839a452e"
+BASELINE_COMMIT = "806a6be7b435b1d367d28680770a4b2a14c644b6"
 """main just before the fast path (HDF5 layout, pyarrow CSV, lazy imports) was merged."""
 REPEAT = 3
 # the child reports its own peak resident memory (VmHWM: this program's, reset by exec, unlike

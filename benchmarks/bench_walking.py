@@ -11,12 +11,8 @@ from __future__ import annotations
 import numpy as np
 
 from anklelab.forceplate import CHANNELS, ankle_torque, resultants, sagittal_load
-from anklelab.pipelines.walking import (
-    WalkingSettings,
-    _cop_at_contact,
-    analyze_walking,
-    fit_platform_filters,
-)
+from anklelab.pipelines.walking import WalkingSettings, analyze_walking, fit_platform_filters
+from anklelab.pipelines.walking.stance import _cop_at_contact
 from anklelab.signals import (
     bootstrap_weights,
     heel_contact,

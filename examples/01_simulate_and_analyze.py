@@ -36,17 +36,18 @@ results = analyze_walking(session, WalkingSettings(bootstrap_reps=30))
 
 # 3. Compare each timing point with the twin's reference: what a perfect estimator returns.
 print(f"platform filters: held-out VAF {np.mean(results.filter_vaf):.2f} %")
-print("condition    trials  lever arm     stiffness (N·m/rad)            inertia (kg·m²)")
-print("                        (cm)    estimate (sd)  truth  error      estimate  truth")
+print("condition    trials  lever arm        stiffness (N·m/rad)             inertia (kg·m²)")
+print("                        (cm)    estimate [95 % interval]  truth  error   estimate  truth")
 for tp in results.timing_points:
     truth = session.truth["reference"][tp.direction][f"{tp.delay_ms:g}"]
-    k, k_sd, k_true = np.mean(tp.stiffness), np.std(tp.stiffness), truth["stiffness_nm_per_rad"]
+    k, (low, high), k_true = tp.stiffness.mean, tp.stiffness.ci95, truth["stiffness_nm_per_rad"]
+    inertia = "poorly determined" if tp.inertia.poorly_determined else f"{tp.inertia.mean:6.3f}"
     print(
-        f"{tp.key:12s} {tp.n_perturbed:5d}   {tp.cop_m * 100:6.2f}    {k:7.0f} ({k_sd:3.0f})"
-        f" {k_true:6.0f} {100 * (k - k_true) / k_true:+5.1f} %    {np.mean(tp.inertia):6.3f} "
+        f"{tp.key:12s} {tp.n_perturbed:5d}   {tp.cop_m * 100:6.2f}    {k:7.0f} [{low:5.0f}, "
+        f"{high:5.0f}] {k_true:6.0f} {100 * (k - k_true) / k_true:+5.1f} %   {inertia} "
         f"{truth['inertia_kgm2']:6.3f}"
     )
-# With ~12 trials per point the sampling error is a few percent (the bootstrap sd shows it);
+# With ~12 trials per point the sampling error is a few percent (the interval shows it);
 # paper 000's 100 trials per point bring it to about 1 %.
 
 # 4. Walking against the testing machine (dorsiflexion only, as in paper 000).

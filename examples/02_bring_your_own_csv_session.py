@@ -81,13 +81,14 @@ for number, recording in enumerate(lab.calibration, start=1):
     write_csv(root / "calibration" / f"calibration_{number:02d}.csv", recording.columns)
 
 # Walking: one file per trial (time_s, motor_angle, ankle_angle and the eight channels) and a
-# manifest row per trial. delay_ms is the intended timing point, empty when unperturbed; heel
-# contact and the true onset are detected from the data.
+# manifest row per trial. The trial label is any text unique in the session (here the twin's
+# numbers, but "d060_1" or "S03_T012" work as well). delay_ms is the intended timing point,
+# empty when unperturbed; heel contact and the true onset are detected from the data.
 with open(root / "walking" / "trials.csv", "w", newline="") as f:
     manifest = csv.writer(f)
     manifest.writerow(["trial", "file", "perturbed", "direction", "delay_ms"])
-    for trial in lab.walking:
-        name = f"trial_{trial.trial:04d}.csv"
+    for number, trial in enumerate(lab.walking, start=1):
+        name = f"trial_{number:04d}.csv"
         write_csv(root / "walking" / name, trial.recording.columns)
         delay = "" if not trial.perturbed else f"{trial.delay_ms:g}"
         manifest.writerow([trial.trial, name, int(trial.perturbed), trial.direction, delay])
@@ -96,8 +97,8 @@ with open(root / "walking" / "trials.csv", "w", newline="") as f:
 with open(root / "bench" / "tests.csv", "w", newline="") as f:
     manifest = csv.writer(f)
     manifest.writerow(["test", "file", "distance_m"])
-    for test in lab.bench:
-        name = f"bench_{test.test:02d}.csv"
+    for number, test in enumerate(lab.bench, start=1):
+        name = f"bench_{number:02d}.csv"
         write_csv(root / "bench" / name, test.recording.columns)
         manifest.writerow([test.test, name, test.distance_m])
 
@@ -120,7 +121,7 @@ results = analyze_walking(session, WalkingSettings(bootstrap_reps=30))
 for tp in results.timing_points:
     print(
         f"{tp.key:12s} n = {tp.n_perturbed:2d}  lever arm {tp.cop_m * 100:5.2f} cm  "
-        f"k = {np.mean(tp.stiffness):5.0f} N·m/rad  I = {np.mean(tp.inertia):.3f} kg·m²"
+        f"k = {tp.stiffness.mean:5.0f} N·m/rad  I = {tp.inertia.mean:.3f} kg·m²"
     )
 dropped = [reasons for reasons in results.stance.drop_log if reasons]
 print(f"{len(dropped)} of {len(session.walking)} walking trials dropped")

@@ -39,7 +39,7 @@ for inputs in (("angle", "acceleration"), ("acceleration",)):
     filters, vaf, by_channel = fit_platform_filters(session, settings)
     held = filters.predict(hold)[:, -1]  # the eight channels, N, after 0.5 s of hold
     results = analyze_walking(session, settings, filters=filters)
-    stiffness = {tp.key: np.mean(tp.stiffness) for tp in results.timing_points}
+    stiffness = {tp.key: tp.stiffness.mean for tp in results.timing_points}
     print(f"inputs {' + '.join(inputs)}:")
     print(f"  held-out VAF {np.mean(vaf):.2f} % (all channels pooled); per channel:")
     # channels that carry almost nothing but noise (here the lateral fy) score near 0 %

@@ -11,7 +11,7 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from anklelab.data import load_session, read_directory, save_session, session_hash
+from anklelab.data import diff_sessions, load_session, read_directory, save_session, session_hash
 from anklelab.data._csv import NUMBER, parse_numeric
 from anklelab.data._synthetic import random_session
 from anklelab.errors import SessionFormatError
@@ -212,6 +212,59 @@ def test_fast_and_slow_parsers_agree():
     assert line(4) == slow_line(4) == "line 6"
 
 
+def csv_text(values, empty=()):
+    """``values`` (columns a, b, c) as CSV; the (row, column) cells in ``empty`` left empty."""
+    rows = [[repr(float(v)) for v in row] for row in values.T]
+    for i, j, cell in empty:
+        rows[i][j] = cell
+    return "a,b,c\n" + "".join(",".join(row) + "\n" for row in rows)
+
+
+def test_empty_cells_of_nullable_columns_read_as_nan_in_both_parsers():
+    values = np.random.default_rng(2).normal(0, 1e3, (3, 30))
+    values[1, [3, 7, 8]] = np.nan
+    text = csv_text(values, [(3, 1, ""), (7, 1, '""'), (8, 1, "")])
+    fast, line = parse_numeric("f.csv", text.encode(), ["a", "b", "c"], ("b",))
+    # a cell of spaces, and a line of spaces, are read row by row
+    slow_text = csv_text(values, [(3, 1, "  "), (7, 1, '""'), (8, 1, "")]) + "  \n"
+    slow, slow_line = parse_numeric("f.csv", slow_text.encode(), ["a", "b", "c"], ("b",))
+    assert fast.tobytes() == slow.tobytes() == values.tobytes()
+    assert line(8) == slow_line(8) == "line 10"
+
+
+@pytest.mark.parametrize("tail", ["", "  \n"], ids=["fast", "slow"])
+@pytest.mark.parametrize("cell", ["", '""', " "])
+def test_an_empty_cell_outside_the_nullable_columns_is_named(tail, cell):
+    values = np.ones((3, 10))
+    text = csv_text(values, [(2, 1, ""), (5, 2, cell)]) + tail
+    with pytest.raises(
+        SessionFormatError,
+        match=r"^f\.csv: column 'c', line 7: an empty cell; expected a number$",
+    ):
+        parse_numeric("f.csv", text.encode(), ["a", "b", "c"], ("b",))
+    with pytest.raises(
+        SessionFormatError,
+        match=r"^f\.csv: column 'b', line 4: an empty cell; expected a number$",
+    ):
+        parse_numeric("f.csv", text.encode(), ["a", "b", "c"], ("a",))
+
+
+def test_grf_cop_session_directory_with_empty_cop_cells(tmp_path):
+    session = random_session(plate="grf_cop", n_walking=3, n_bench=0)
+    root = save_session(session, tmp_path / "s", format="dir")
+    for path in [*root.glob("calibration/*.csv"), *root.glob("walking/trial_*.csv")]:
+        path.write_text(path.read_text().replace("nan", ""))  # as exported: empty cells
+    assert ",," in (root / "walking/trial_0002.csv").read_text()
+    back = read_directory(root)
+    assert np.isnan(back.walking[1].recording["cop_y_m"][:10]).all()
+    assert diff_sessions(back, session) == []
+    set_cell(root / "walking/trial_0002.csv", 6, "grf_z_n", "")
+    rejected(
+        root,
+        r"s/walking/trial_0002\.csv: column 'grf_z_n', line 6: an empty cell; expected a number$",
+    )
+
+
 @settings(max_examples=200, deadline=None)
 @given(st.text(alphabet="0123456789+-.eEinfatyINFATY_ x", max_size=12))
 def test_number_grammar_matches_the_fast_parser(cell):
@@ -259,3 +312,22 @@ def test_fuzz_recording_files(tmp_path_factory, base, trial_bytes, cut, insert, 
         read_directory(root)
     except SessionFormatError as exc:
         assert "trial_0002.csv" in str(exc) and "\n" not in str(exc)
+
+
+@settings(max_examples=150, deadline=None)
+@given(
+    st.lists(st.sampled_from(["1", "-2.5e3", "nan", "", " ", '""', "x", "1_0", ","]), max_size=40)
+)
+def test_fuzz_nullable_cells(cells):
+    """Any mix of numbers, empty and bad cells: NaN exactly where column b is empty, or one
+    clear error; the fast parser and the row-by-row one agree."""
+    text = "a,b,c\n" + "".join(",".join(cells[i : i + 3]) + "\n" for i in range(0, len(cells), 3))
+    results = []
+    for tail in ("", "  \n"):  # the second is read row by row
+        try:
+            values, _ = parse_numeric("f.csv", (text + tail).encode(), ["a", "b", "c"], ("b",))
+            results.append(values.tobytes())
+        except SessionFormatError as exc:
+            assert str(exc).startswith("f.csv: ") and "\n" not in str(exc)
+            results.append(str(exc))
+    assert results[0] == results[1]

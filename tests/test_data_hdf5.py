@@ -12,7 +12,7 @@ from hypothesis import strategies as st
 from anklelab.data import diff_sessions, hdf5, load_session, read_hdf5, save_session
 from anklelab.data._synthetic import random_session
 from anklelab.data._tree import create_group, link_name, read_h5_tree, write_h5_tree
-from anklelab.data.hdf5 import H5_FORMAT, label_from_text
+from anklelab.data.hdf5 import H5_FORMAT
 from anklelab.errors import SessionFormatError
 
 
@@ -53,7 +53,7 @@ def write_v1(session, path):
                     t.recording,
                     dict(t.extra)
                     | {
-                        "trial": np.int64(t.trial),
+                        "trial": np.int64(int(t.trial)),
                         "perturbed": np.bool_(t.perturbed),
                         "direction": t.direction,
                         "delay_ms": np.float64(t.delay_ms),
@@ -64,7 +64,7 @@ def write_v1(session, path):
             "bench": [
                 (
                     b.recording,
-                    dict(b.extra) | {"test": np.int64(b.test), "distance_m": b.distance_m},
+                    dict(b.extra) | {"test": np.int64(int(b.test)), "distance_m": b.distance_m},
                 )
                 for b in session.bench
             ],
@@ -97,18 +97,40 @@ def test_layout_is_contiguous_per_section_checksummed_and_labelled_as_text(h5, s
         assert all(f[f"{s}/manifest/file"].fletcher32 for s in ("calibration", "walking", "bench"))
     back = read_hdf5(h5)
     assert diff_sessions(back, session) == []
-    assert back.walking[3].trial == 4 and back.walking[3].recording["fz1"].flags.c_contiguous
+    assert back.walking[3].trial == "4" and back.walking[3].recording["fz1"].flags.c_contiguous
 
 
-def test_labels_come_back_as_written():
-    assert [label_from_text(t) for t in ("7", "-3", "007", "1e3", "d060_1", " 1")] == [
-        7,
-        -3,
-        "007",
-        "1e3",
-        "d060_1",
-        " 1",
-    ]
+@pytest.mark.parametrize("fmt", ["h5", "dir"])
+def test_plate_type_empty_cop_and_text_labels_round_trip(tmp_path, fmt):
+    s = random_session(plate="grf_cop", text_labels=True, n_walking=3, n_bench=1)
+    back = load_session(save_session(s, tmp_path / "s", format=fmt))
+    assert diff_sessions(back, s, provenance=False) == []
+    assert back.info.force_plate.type == "grf_cop" and back.info.force_plate.plate_centre_m == (
+        0.4,
+        2.0,
+    )
+    assert [t.trial for t in back.walking] == ["S01 d1", "S01 d2", "S01 d3"]
+    assert back.bench[0].test == "b1"
+    assert np.isnan(back.walking[1].recording["cop_x_m"][:10]).all()
+
+
+def test_empty_cop_is_checked_like_any_value(tmp_path, monkeypatch):
+    s = random_session(plate="grf_cop", n_walking=3)
+    path = store_unchecked(
+        monkeypatch, with_column(s, 1, "grf_x_n", np.full(50, np.nan)), tmp_path / "s.h5"
+    )
+    with pytest.raises(
+        SessionFormatError, match=r"s\.h5:/walking/trial_0002\.csv: column 'grf_x_n', sample 1"
+    ):
+        read_hdf5(path)
+    cop = np.full(50, np.inf)
+    path = store_unchecked(monkeypatch, with_column(s, 2, "cop_y_m", cop), tmp_path / "t.h5")
+    with pytest.raises(
+        SessionFormatError,
+        match=r"trial_0003\.csv: column 'cop_y_m', sample 1: value inf; expected a finite number "
+        "or an empty cell",
+    ):
+        read_hdf5(path)
 
 
 def test_empty_sections_and_no_truth(tmp_path):
@@ -126,6 +148,23 @@ def test_first_layout_still_reads(tmp_path, session):
     with pytest.raises(
         SessionFormatError,
         match=r"old\.h5:/walking/trial_0003\.csv: column 'fz2', sample 8: value nan",
+    ):
+        load_session(path)
+
+
+def test_first_layout_with_text_labels(tmp_path, session):
+    """anklelab-h5/1 files written after labels became text hold them as text attributes."""
+    path = write_v1(session, tmp_path / "old.h5")
+    with h5py.File(path, "a") as f:
+        f["walking/trial_0002.csv"].attrs["trial"] = "d060_1"
+        f["bench/bench_01.csv"].attrs["test"] = "A"
+    back = load_session(path)
+    assert [t.trial for t in back.walking[:3]] == ["1", "d060_1", "3"]
+    assert back.bench[0].test == "A"
+    with h5py.File(path, "a") as f:
+        f["walking/trial_0002.csv"].attrs["trial"] = 2.5
+    with pytest.raises(
+        SessionFormatError, match=r"old\.h5:/walking/trial_0002\.csv: attribute 'trial': got "
     ):
         load_session(path)
 
@@ -181,7 +220,7 @@ def test_duplicate_label(tmp_path, monkeypatch, session):
     path = store_unchecked(monkeypatch, replace(session, walking=tuple(walking)), tmp_path / "s.h5")
     with pytest.raises(
         SessionFormatError,
-        match=r"s\.h5:/walking/manifest: row 4: duplicate trial 2 \(already at row 2\)",
+        match=r"s\.h5:/walking/manifest: row 4: duplicate trial '2' \(already at row 2\)",
     ):
         load_session(path)
 

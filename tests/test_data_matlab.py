@@ -202,7 +202,7 @@ def walking_field(i, name, value):
         ),
         (
             walking_field(2, "trial", 2.0),
-            r"bad\.mat: session\.walking\(3\): duplicate trial 2 "
+            r"bad\.mat: session\.walking\(3\): duplicate trial '2' "
             r"\(already at session\.walking\(2\)\)",
         ),
     ],
@@ -227,6 +227,22 @@ def test_missing_field_and_missing_variable(tmp_path, session):
     (tmp_path / "c.mat").write_bytes(b"not a mat file at all")
     with pytest.raises(SessionFormatError, match=r"c\.mat: cannot read as a MAT file"):
         read_matlab(tmp_path / "c.mat")
+
+
+def test_labels_are_text_or_integers(tmp_path, session):
+    """A trial label may be a char array ('d060_1') or an integer; the default file name
+    follows it."""
+    root = as_matlab(session)
+    root["walking"][0, 0]["trial"] = "d060_1"
+    root["bench"][0, 0]["test"] = "bench A"
+    for name in ("walking", "bench"):
+        names = [n for n in root[name].dtype.names if n != "file"]
+        root[name] = struct_array([{n: e[n] for n in names} for e in root[name][0]])
+    scipy.io.savemat(tmp_path / "t.mat", {"session": root})
+    again = read_matlab(tmp_path / "t.mat")
+    assert [t.trial for t in again.walking[:2]] == ["d060_1", "2"]
+    assert [t.recording.name for t in again.walking[:2]] == ["d060_1.csv", "trial_0002.csv"]
+    assert again.bench[0].test == "bench A" and again.bench[0].recording.name == "bench_A.csv"
 
 
 # --- MAT v7.3 files that are damaged or point elsewhere ---------------------------------------

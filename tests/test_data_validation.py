@@ -203,14 +203,14 @@ CASES = [
         r"walking/trials\.csv: line 2, column 'perturbed': got 'yes'; expected 0 or 1",
     ),
     (
-        "non-integer trial",
-        lambda d: replace(d / "walking/trials.csv", "3,trial_0003", "3.5,trial_0003"),
-        r"walking/trials\.csv: line 4, column 'trial': got '3\.5'; expected an integer",
+        "empty trial label",
+        lambda d: replace(d / "walking/trials.csv", "3,trial_0003", ",trial_0003"),
+        r"walking/trials\.csv: line 4, column 'trial': empty cell; expected a label",
     ),
     (
         "duplicate trial id",
         lambda d: replace(d / "walking/trials.csv", "3,trial_0003", "2,trial_0003"),
-        r"walking/trials\.csv: line 4: duplicate trial 2 \(already at line 3\)",
+        r"walking/trials\.csv: line 4: duplicate trial '2' \(already at line 3\)",
     ),
     (
         "duplicate file",

@@ -8,10 +8,14 @@ from hypothesis import strategies as st
 from anklelab.errors import EventNotFoundError
 from anklelab.forceplate import (
     CHANNELS,
+    PLATE_TYPES,
+    GrfCopPlate,
     PlateGeometry,
     SagittalLoad,
+    SixAxisPlate,
     ankle_torque,
     channels_from_load,
+    plate_class,
     resultants,
     sagittal_load,
 )
@@ -200,3 +204,87 @@ def test_ankle_torque_rejects_heel_contact_outside_the_trial():
 def test_plate_geometry_is_validated():
     with pytest.raises(ValueError, match="az0_m"):
         PlateGeometry(a_m=0.1, b_m=0.1, az0_m=0.05)
+
+
+# --- plate types ----------------------------------------------------------------------------------
+
+DIRECTIONS = {"+x": (1, 0), "-x": (-1, 0), "+y": (0, 1), "-y": (0, -1)}
+
+
+def walking_load(axis):
+    """A foot 5 cm ahead of and 2 cm left of the centre, pushed forwards by 40 N, to the right
+    by 15 N and up by 700 N, as the load on the plate (plate frame, z down) and its point."""
+    ux, uy = DIRECTIONS[axis]
+    lx, ly = -uy, ux  # the plate-frame direction of the walker's right (z down: y = right)
+    # walking-frame vectors (x fwd, y left) -> plate frame: fwd = u, left = -right
+    fwd = np.array([ux, uy])
+    left = -np.array([lx, ly])
+    grf_h = 40.0 * fwd - 15.0 * left  # GRF (plate on foot): forwards, to the right
+    force = [-grf_h[0], -grf_h[1], 700.0]  # load on plate: opposite, z down
+    cop = 0.05 * fwd + 0.02 * left
+    return force, cop
+
+
+@pytest.mark.parametrize("axis", ["+x", "-x", "+y", "-y"])
+@pytest.mark.parametrize("kind", ["kistler8", "six_axis"])
+def test_linear_plates_give_the_walking_frame_load(kind, axis):
+    geometry = plate(axis) if kind == "kistler8" else SixAxisPlate(az0_m=AZ0, anterior_axis=axis)
+    force, cop = walking_load(axis)
+    channels = channels_from_load(force, cop, geometry, free_moment_nm=-3.0, axis=0)
+    lab = geometry.lab_load(channels, axis=0)
+    assert [float(v) for v in (lab.grf_x, lab.grf_y, lab.grf_z)] == pytest.approx(
+        [40.0, -15.0, 700.0]
+    )
+    assert [float(lab.cop_x), float(lab.cop_y)] == pytest.approx([0.05, 0.02])
+    # the foot twists the plate by 3 N·m about the upward vertical (-3 about plate z, which
+    # points down); the plate's free moment on the foot is the reaction: -3 N·m about up
+    assert float(lab.free_moment) == pytest.approx(-3.0)
+    sagittal = geometry.sagittal_matrix() @ geometry.load_signals(channels, axis=0)
+    assert sagittal == pytest.approx([40.0, 700.0, 700.0 * 0.05])
+
+
+@pytest.mark.parametrize("axis", ["+x", "-x", "+y", "-y"])
+def test_grf_cop_plate_turns_the_lab_frame_into_the_walking_frame(axis):
+    ux, uy = DIRECTIONS[axis]
+    # lab frame z up: the walker's left is (-uy, ux)
+    grf = 40.0 * np.array([ux, uy]) - 15.0 * np.array([-uy, ux])
+    cop = 0.30 * np.array([ux, uy]) + 0.02 * np.array([-uy, ux])
+    g = GrfCopPlate(anterior_axis=axis)
+    data = np.array([grf[0], grf[1], 700.0, cop[0], cop[1]])
+    lab = g.lab_load(data, axis=0)
+    assert [float(v) for v in (lab.grf_x, lab.grf_y, lab.grf_z)] == pytest.approx(
+        [40.0, -15.0, 700.0]
+    )
+    assert [float(lab.cop_x), float(lab.cop_y)] == pytest.approx([0.30, 0.02])
+    assert np.isnan(lab.free_moment)
+    assert g.load_signals(data, axis=0) == pytest.approx([40.0, 700.0, 700.0 * 0.30])
+    np.testing.assert_array_equal(g.sagittal_matrix(), np.eye(3))
+
+
+def test_grf_cop_moment_is_zero_where_the_cop_is_empty():
+    data = np.array([[0.0, 5.0], [0.0, 0.0], [0.5, 700.0], [np.nan, 0.1], [np.nan, 0.0]])
+    signals = GrfCopPlate().load_signals(data)
+    np.testing.assert_allclose(signals, [[0.0, 5.0], [0.5, 700.0], [0.0, 70.0]])
+
+
+def test_six_axis_resultants_of_a_kistler_plate_give_the_same_sagittal_signals():
+    rng = np.random.default_rng(1)
+    kistler = plate("-y")
+    channels = rng.normal(0, 50, (8, 20)) + np.array([0, 0, 0, 0, 200, 200, 200, 200])[:, None]
+    res = resultants(channels, kistler)
+    six = np.stack([res.fx, res.fy, res.fz, res.mx, res.my, res.mz])
+    six_axis = SixAxisPlate(az0_m=AZ0, anterior_axis="-y")
+    np.testing.assert_allclose(
+        six_axis.sagittal_matrix() @ six, kistler.sagittal_matrix() @ channels, atol=1e-9
+    )
+
+
+def test_plate_types_are_named_and_checked():
+    assert PLATE_TYPES == ("kistler8", "six_axis", "grf_cop")
+    assert plate_class("six_axis") is SixAxisPlate
+    with pytest.raises(ValueError, match="type: expected one of kistler8, six_axis, grf_cop"):
+        plate_class("amti")
+    with pytest.raises(ValueError, match=r"expected 6 channels .* six_axis"):
+        resultants(np.zeros(8), SixAxisPlate(az0_m=0.0), axis=0)
+    with pytest.raises(ValueError, match="az0_m"):
+        SixAxisPlate(az0_m=0.01)

@@ -10,7 +10,8 @@ from anklelab.data import save_session
 from anklelab.data._synthetic import random_session
 
 TWINS = ["numba", "llvmlite", "anklelab.sim", "anklelab.control", "anklelab.experiments"]
-HEAVY = [*TWINS, "scipy", "h5py", "matplotlib", "pyarrow"]
+LAB_FORMATS = ["ezc3d", "anklelab.data.c3d", "anklelab.data.c3d_import", "anklelab.data.matlab_map"]
+HEAVY = [*TWINS, *LAB_FORMATS, "scipy", "h5py", "matplotlib", "pyarrow"]
 
 
 def loaded(code, *argv):
@@ -77,7 +78,7 @@ def test_session_info_and_import_load_no_analysis_or_twin(sessions, tmp_path):
         ("import", directory, "--out", tmp_path / "x.h5"),
     ):
         modules = loaded("from anklelab.cli import run; run()", *argv)
-        assert not modules & {*TWINS, "scipy", "matplotlib", "anklelab.ident"}, argv
+        assert not modules & {*TWINS, *LAB_FORMATS, "scipy", "matplotlib", "anklelab.ident"}, argv
     assert (tmp_path / "x.h5").exists()
 
 
@@ -89,6 +90,6 @@ def test_the_analysis_of_recorded_data_never_loads_numba_or_the_twins(sessions):
         "from anklelab.cli import run; run()", "analyze", h5, "--out", h5.with_name("out")
     )
     assert "anklelab.pipelines.walking" in modules
-    assert not modules & {*TWINS, "anklelab.ident.friction", "matplotlib"}
+    assert not modules & {*TWINS, *LAB_FORMATS, "anklelab.ident.friction", "matplotlib"}
     figures = loaded("import anklelab.report.figures_walking, anklelab.pipelines.walking")
     assert not figures & {*TWINS, "anklelab.ident.friction"}

@@ -20,6 +20,8 @@ RANK = {
     "_lazy": 0,
     "_params": 0,
     "_atomic": 0,
+    "_lock": 0,
+    "_runs": 0,
     "_version": 0,
     "errors": 0,
     "forceplate": 0,

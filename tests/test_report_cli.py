@@ -1,6 +1,7 @@
 """``anklelab report RESULTS_DIR`` on `analyze` and `identify friction` outputs; bad directories."""
 
 import json
+import re
 import sys
 
 import pytest
@@ -74,8 +75,13 @@ def test_missing_figures_are_reported_not_fatal(identified, tmp_path):
     bare = tmp_path / "bare"
     bare.mkdir()
     (bare / "friction.json").write_bytes((identified / "friction.json").read_bytes())
-    path, missing = results_report(bare)
-    assert missing == [f"{stem}.png" for stem, _, _ in FRICTION_FIGURES]
+    path, notes = results_report(bare)
+    names = ", ".join(f"{stem}.png" for stem, _, _ in FRICTION_FIGURES)
+    assert notes == [
+        f"{bare}: no run.json (an older anklelab's output, or not anklelab's); its files cannot "
+        "be checked against the run that wrote them",
+        f"figures not found in {bare}: {names} (re-run the analysis with figures to include them)",
+    ]
     assert "Figures not found in the directory: spindown_fit.png" in path.read_text()
 
 
@@ -124,3 +130,88 @@ def test_cli_error_is_one_line_and_exit_code_2(tmp_path, monkeypatch, capsys):
     assert exit_info.value.code == 2
     err = capsys.readouterr().err
     assert err.startswith(f"error: {tmp_path}: no results.json") and "Traceback" not in err
+
+
+# --- what the report embeds: only the files the run wrote (issue 11) ---------------------------
+
+
+def copy_of(directory, tmp_path):
+    import shutil
+
+    return shutil.copytree(directory, tmp_path / "o", symlinks=True)
+
+
+def embedded(page):
+    import base64
+
+    return [base64.b64decode(m) for m in re.findall(r'src="data:image/png;base64,([^"]+)"', page)]
+
+
+def test_report_never_embeds_what_a_figure_path_points_at(analysed, tmp_path):
+    out = copy_of(analysed, tmp_path)
+    secret = tmp_path / "shadow"
+    secret.write_bytes(b"\x89PNG\r\n\x1a\nroot:secret")  # even with a PNG signature
+    (out / "filters.png").unlink()
+    (out / "filters.png").symlink_to(secret)
+    (out / "model_fit.png").write_bytes((out / "stance_profiles.png").read_bytes())
+    path, notes = results_report(out)
+    assert notes == [
+        f"{out}/filters.png: leads outside {out}; not embedded",
+        f"{out}/model_fit.png: changed since the run wrote it (SHA-256 differs from run.json); "
+        "not embedded",
+    ]
+    figures = embedded(path.read_text())
+    assert len(figures) == 2 and all(b"root:secret" not in png for png in figures)
+    assert figures == [
+        (out / f"{n}.png").read_bytes() for n in ("stance_profiles", "stiffness_vs_lever_arm")
+    ]
+    assert "Figures not embedded: " in path.read_text()
+
+
+def test_directory_without_manifest_embeds_only_regular_png_files(analysed, tmp_path):
+    out = copy_of(analysed, tmp_path)
+    (out / "run.json").unlink()
+    (out / "filters.png").write_text("not an image")
+    (out / "model_fit.png").unlink()
+    (out / "model_fit.png").symlink_to(out / "stance_profiles.png")
+    path, notes = results_report(out)
+    assert notes[0].startswith(f"{out}: no run.json (an older anklelab's output")
+    assert notes[1:] == [
+        f"{out}/filters.png: not a PNG image; not embedded",
+        f"{out}/model_fit.png: a symbolic link; expected a regular file; not embedded",
+    ]
+    assert len(embedded(path.read_text())) == 2
+
+
+@pytest.mark.parametrize(
+    ("change", "message"),
+    [
+        ("friction", "friction.json: not written by the run (not listed in run.json)"),
+        ("edit", "results.json: changed since the run wrote it"),
+        ("link", "results.json: a symbolic link; expected a regular file"),
+    ],
+)
+def test_result_files_must_be_the_ones_the_run_wrote(analysed, tmp_path, change, message):
+    out = copy_of(analysed, tmp_path)
+    if change == "friction":
+        (out / "friction.json").write_text("{}")
+    elif change == "edit":
+        (out / "results.json").write_text((out / "results.json").read_text() + " ")
+    else:
+        (out / "results.json").unlink()
+        (out / "results.json").symlink_to(out / "results.csv")
+    with pytest.raises(ResultsFormatError, match=re.escape(message)):
+        results_report(out)
+
+
+def test_friction_json_holding_a_string_is_one_error_line(tmp_path, monkeypatch, capsys):
+    (tmp_path / "friction.json").write_text('"a string"')
+    monkeypatch.setattr(sys, "argv", ["anklelab", "report", str(tmp_path)])
+    with pytest.raises(SystemExit) as exit_info:
+        run()
+    err = capsys.readouterr().err
+    assert exit_info.value.code == 2 and "Traceback" not in err
+    assert [line for line in err.splitlines() if line.startswith("error:")] == [
+        f"error: {tmp_path}/friction.json: expected a JSON object, got str"
+    ]
+    assert not (tmp_path / "report.html").exists()

@@ -50,9 +50,11 @@ def test_average_and_bootstrap():
     rng = np.random.default_rng(0)
     t = Trials(rng.normal(size=(50, 3, 20)), 1000.0, ["a", "b", "c"])
     assert np.allclose(t.average(), t.data.mean(axis=0))
-    boot = t.bootstrap(200, 0.6, random_state=7)
+    averages = t.bootstrap(200, 0.6, random_state=7)
+    assert isinstance(averages, Trials) and averages.ch_names == t.ch_names
+    boot = averages.data
     assert boot.shape == (200, 3, 20)
-    assert np.array_equal(boot, t.bootstrap(200, 0.6, random_state=7))
+    assert np.array_equal(boot, t.bootstrap(200, 0.6, random_state=7).data)
     # each repetition is the mean of 30 distinct trials: check one against its subset
     w = bootstrap_weights(50, 200, 0.6, random_state=7)
     subset = np.flatnonzero(w[5])

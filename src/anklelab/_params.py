@@ -11,6 +11,8 @@ from __future__ import annotations
 
 import difflib
 import json
+import os
+import stat
 import tomllib
 from collections.abc import Iterable, Mapping
 from pathlib import Path
@@ -175,6 +177,35 @@ def load_parameters(model: type[P], path: str | Path) -> P:
     return parameters_from_mapping(model, data, origin=str(path))
 
 
+_MAX_DOCUMENT_BYTES = 64 << 20
+
+
+def _read_text(path: Path, what: str) -> str:
+    """The UTF-8 text of a regular file of at most 64 MiB (never blocks on a FIFO)."""
+    try:
+        fd = os.open(path, os.O_RDONLY | os.O_NONBLOCK | os.O_CLOEXEC)
+    except FileNotFoundError:
+        raise ParameterError(f"{path}: {what} not found") from None
+    except OSError as exc:
+        raise ParameterError(f"{path}: cannot read the {what}: {exc.strerror}") from None
+    mode = os.fstat(fd).st_mode
+    if not stat.S_ISREG(mode):
+        os.close(fd)
+        kind = "a directory" if stat.S_ISDIR(mode) else "not a regular file"
+        raise ParameterError(f"{path}: {kind}; expected a {what}")
+    with os.fdopen(fd, "rb") as f:
+        data = f.read(_MAX_DOCUMENT_BYTES + 1)
+    if len(data) > _MAX_DOCUMENT_BYTES:
+        raise ParameterError(f"{path}: larger than {_MAX_DOCUMENT_BYTES >> 20} MiB; not a {what}")
+    try:
+        return data.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        raise ParameterError(
+            f"{path}: not UTF-8 text (byte {data[exc.start]:#04x} at offset {exc.start}); "
+            f"expected a {what}"
+        ) from None
+
+
 def read_parameter_document(
     path: str | Path, kind: Literal["toml", "json"], *, what: str
 ) -> dict[str, Any]:
@@ -192,17 +223,17 @@ def read_parameter_document(
     Raises
     ------
     ParameterError
-        Naming the file: missing, not valid TOML/JSON (with the parser's position), or not a
-        table at the top level.
+        Naming the file: missing, not a regular file, not UTF-8, not valid TOML/JSON (with the
+        parser's position), nested too deeply, or not a table at the top level.
     """
     path = Path(path)
+    text = _read_text(path, what)
     try:
-        text = path.read_text(encoding="utf-8")
         data = tomllib.loads(text) if kind == "toml" else json.loads(text)
-    except FileNotFoundError:
-        raise ParameterError(f"{path}: {what} not found") from None
     except (tomllib.TOMLDecodeError, json.JSONDecodeError) as exc:
         raise ParameterError(f"{path}: not valid {kind.upper()}: {exc}") from None
+    except RecursionError:
+        raise ParameterError(f"{path}: not a {what}: tables nested too deeply") from None
     if not isinstance(data, dict):
         raise ParameterError(f"{path}: expected a JSON object, got {type(data).__name__}")
     return data

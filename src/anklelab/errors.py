@@ -7,6 +7,7 @@ __all__ = [
     "AnklelabWarning",
     "EventNotFoundError",
     "NotFittedError",
+    "OutputError",
     "ParameterError",
     "ResultsFormatError",
     "SafetyLimitError",
@@ -29,6 +30,12 @@ class ParameterError(AnklelabError, ValueError):
 
 class SessionFormatError(AnklelabError, ValueError):
     """A session file or directory does not follow the anklelab session format."""
+
+
+class OutputError(AnklelabError, OSError):
+    """An output cannot be written as asked: it exists (and ``--force`` was not given, or it
+    is not an output of the same kind), it lies inside an input, another process is writing
+    it, or the file system refused."""
 
 
 class ResultsFormatError(AnklelabError, ValueError):

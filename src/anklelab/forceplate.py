@@ -1,46 +1,143 @@
-"""Force-plate conventions: 8-channel Kistler signals, resultants, COP, GRF and ankle torque.
+"""Force-plate conventions: plate types, resultants, COP, GRF and ankle torque.
 
-Raw channels follow the manufacturer's convention (Kistler 9260-type): forces applied **by the
-load to the plate**, plate frame x anterior, y to the right, z down; sensor 1 at (+a, +b),
-2 at (-a, +b), 3 at (-a, -b), 4 at (+a, -b). Resultants are linear in the channels,
-``r = A @ c`` with ``r = (Fx, Fy, Fz, Mx, My, Mz)`` about the centre of the sensor plane, so the
-forward map and its inverse (the minimum-norm channels that produce a given load, used by the
-digital twin) are both a single matrix product, vectorised over samples and trials.
+A session's force plate is one of three **types** (``[force_plate] type`` in ``session.toml``):
 
-The lab frame for analysis has x anterior (walking direction) and z up, and the ground reaction
-force is the force of the plate on the foot; ``anterior_axis`` says which plate axis points in
-the walking direction.
+- ``kistler8`` (:class:`PlateGeometry`, the default): the 8 Kistler channels :data:`CHANNELS`.
+  Raw channels follow the manufacturer's convention (Kistler 9260-type): forces applied **by
+  the load to the plate**, plate frame x anterior, y to the right, z down; sensor 1 at
+  (+a, +b), 2 at (-a, +b), 3 at (-a, -b), 4 at (+a, -b).
+- ``six_axis`` (:class:`SixAxisPlate`): the six components :data:`SIX_AXIS_CHANNELS`
+  (Fx, Fy, Fz, Mx, My, Mz; AMTI, Bertec) in the same convention (load on plate, z down), the
+  moments taken about a declared origin below the surface.
+- ``grf_cop`` (:class:`GrfCopPlate`): ground reaction force and centre of pressure already
+  reduced to a lab frame with z up (:data:`GRF_COP_CHANNELS`; GRF = plate on body, COP empty
+  where the plate carries too little to define it).
+
+For the linear types the resultants are linear in the channels, ``r = A @ c`` with
+``r = (Fx, Fy, Fz, Mx, My, Mz)``, so the forward map and its inverse (the minimum-norm channels
+that produce a given load, used by the digital twin) are both one matrix product, vectorised
+over samples and trials.
+
+The walking analysis uses three **sagittal signals** in the walking frame (x anterior, z up;
+GRF = plate on foot): ``(grf_x, grf_z, grf_z * cop_x)``. Every plate type maps its recording to
+them in two steps, so the analysis never needs to know the type: :meth:`load_signals` gives
+the signals that are linear in the load (the channels themselves for the linear types; the
+sagittal signals, computed per sample, for ``grf_cop``), and :meth:`sagittal_matrix` the
+``(3, n_signals)`` matrix from those to the sagittal signals. The platform filters model the
+load signals; ``anterior_axis`` says which plate (or lab) axis points in the walking direction.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Literal
+from typing import TYPE_CHECKING, ClassVar, Literal
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
-from pydantic import Field
+from pydantic import Field, field_validator
 
 from anklelab._params import Parameters
 from anklelab.errors import EventNotFoundError, ParameterError
 
 __all__ = [
     "CHANNELS",
+    "GRF_COP_CHANNELS",
+    "PLATE_TYPES",
+    "SAGITTAL_SIGNALS",
+    "SIX_AXIS_CHANNELS",
+    "ForcePlate",
+    "GrfCopPlate",
+    "LabLoad",
     "PlateGeometry",
     "Resultants",
     "SagittalLoad",
+    "SixAxisPlate",
     "ankle_torque",
     "channels_from_load",
+    "cop_from_moment",
+    "kistler_matrix",
+    "plate_class",
     "resultants",
     "sagittal_load",
+    "sagittal_matrix",
 ]
 
 CHANNELS = ("fx12", "fx34", "fy14", "fy23", "fz1", "fz2", "fz3", "fz4")
+"""The ``kistler8`` channels, N."""
+SIX_AXIS_CHANNELS = ("fx", "fy", "fz", "mx", "my", "mz")
+"""The ``six_axis`` channels: forces (N) and moments about the plate's origin (N·m)."""
+GRF_COP_CHANNELS = ("grf_x_n", "grf_y_n", "grf_z_n", "cop_x_m", "cop_y_m")
+"""The ``grf_cop`` channels: lab-frame GRF (N) and COP (m); the COP may be NaN (empty)."""
+SAGITTAL_SIGNALS = ("grf_x", "grf_z", "grf_z_cop_x")
+"""The walking analysis's signals: anterior and vertical GRF (N) and ``grf_z * cop_x`` (N·m)."""
 AnteriorAxis = Literal["+x", "-x", "+y", "-y"]
+DEFAULT_MIN_FZ_N = 1.0
+"""Below this vertical force the COP is undefined (returned as NaN), N."""
 
 
-class PlateGeometry(Parameters):
-    """Where the plate's sensors sit and how the plate is mounted.
+def kistler_matrix(a_m: float, b_m: float) -> NDArray[np.float64]:
+    """The 6x8 map from the 8 Kistler channels (:data:`CHANNELS` order) to (Fx, Fy, Fz, Mx, My,
+    Mz) about the centre of the sensor plane, for sensor offsets ``a_m``, ``b_m`` (m)."""
+    a, b = a_m, b_m
+    return np.array(
+        [
+            [1, 1, 0, 0, 0, 0, 0, 0],
+            [0, 0, 1, 1, 0, 0, 0, 0],
+            [0, 0, 0, 0, 1, 1, 1, 1],
+            [0, 0, 0, 0, b, b, -b, -b],
+            [0, 0, 0, 0, -a, a, a, -a],
+            [-b, b, a, -a, 0, 0, 0, 0],
+        ],
+        dtype=float,
+    )
+
+
+class _LinearPlate(Parameters):
+    """A plate whose resultants are a linear map of its channels (``kistler8``, ``six_axis``)."""
+
+    type: ClassVar[str]
+    channels: ClassVar[tuple[str, ...]]
+    nullable: ClassVar[tuple[str, ...]] = ()
+    if TYPE_CHECKING:  # fields of the subclasses, declared there (in their own order)
+        anterior_axis: AnteriorAxis
+        az0_m: float
+
+    def matrix(self) -> NDArray[np.float64]:
+        """The ``(6, n_channels)`` map from the channels to (Fx, Fy, Fz, Mx, My, Mz)."""
+        raise NotImplementedError
+
+    @property
+    def signals(self) -> tuple[str, ...]:
+        """Names of :meth:`load_signals`: the plate's own channels."""
+        return self.channels
+
+    def load_signals(self, data: ArrayLike, *, axis: int = -2) -> NDArray[np.float64]:
+        """The signals that are linear in the load: the channels themselves."""
+        data = np.asarray(data, dtype=float)
+        _check_count(data.shape[axis], self, axis)
+        return data
+
+    def sagittal_matrix(self) -> NDArray[np.float64]:
+        """The ``(3, n_channels)`` map to :data:`SAGITTAL_SIGNALS` (:func:`sagittal_matrix`)."""
+        return sagittal_matrix(self)
+
+    def lab_load(
+        self, data: ArrayLike, *, min_fz_n: float = DEFAULT_MIN_FZ_N, axis: int = -2
+    ) -> LabLoad:
+        """GRF, COP and free moment in the walking frame (origin at the plate surface's
+        centre for ``kistler8``, above the moment origin for ``six_axis``)."""
+        res = resultants(data, self, min_fz_n=min_fz_n, axis=axis)
+        rotation = _walking_rotation(self.anterior_axis, z_down=True)
+        force = np.stack([res.fx, res.fy, res.fz], axis=-1)
+        cop = np.stack([res.ax, res.ay, np.zeros_like(res.ax)], axis=-1)
+        grf = -force @ rotation.T
+        position = cop @ rotation.T
+        free = res.mz - res.ax * res.fy + res.ay * res.fx
+        return LabLoad(*np.moveaxis(grf, -1, 0), *np.moveaxis(position, -1, 0)[:2], free)
+
+
+class PlateGeometry(_LinearPlate):
+    """The ``kistler8`` plate: where its sensors sit and how it is mounted.
 
     Attributes
     ----------
@@ -52,6 +149,8 @@ class PlateGeometry(Parameters):
         Plate axis that points in the walking direction.
     """
 
+    type: ClassVar[str] = "kistler8"
+    channels: ClassVar[tuple[str, ...]] = CHANNELS
     a_m: float = Field(gt=0)
     b_m: float = Field(gt=0)
     az0_m: float = Field(lt=0)
@@ -59,18 +158,146 @@ class PlateGeometry(Parameters):
 
     def matrix(self) -> NDArray[np.float64]:
         """The 6x8 map from channels (:data:`CHANNELS` order) to (Fx, Fy, Fz, Mx, My, Mz)."""
-        a, b = self.a_m, self.b_m
-        return np.array(
-            [
-                [1, 1, 0, 0, 0, 0, 0, 0],
-                [0, 0, 1, 1, 0, 0, 0, 0],
-                [0, 0, 0, 0, 1, 1, 1, 1],
-                [0, 0, 0, 0, b, b, -b, -b],
-                [0, 0, 0, 0, -a, a, a, -a],
-                [-b, b, a, -a, 0, 0, 0, 0],
-            ],
-            dtype=float,
+        return kistler_matrix(self.a_m, self.b_m)
+
+
+class SixAxisPlate(_LinearPlate):
+    """The ``six_axis`` plate: Fx..Mz (load on plate, z down) about a declared origin.
+
+    Attributes
+    ----------
+    az0_m : float
+        z of the plate surface relative to the point the moments are taken about, m (<= 0:
+        plate z points down, so a surface above the origin is negative; 0 when the moments are
+        already about the surface).
+    anterior_axis : {"+x", "-x", "+y", "-y"}
+        Plate axis that points in the walking direction.
+    """
+
+    type: ClassVar[str] = "six_axis"
+    channels: ClassVar[tuple[str, ...]] = SIX_AXIS_CHANNELS
+    az0_m: float = Field(le=0)
+    anterior_axis: AnteriorAxis = "+x"
+
+    def matrix(self) -> NDArray[np.float64]:
+        """The identity: the channels are the resultants."""
+        return np.eye(6)
+
+
+class GrfCopPlate(Parameters):
+    """The ``grf_cop`` plate: GRF and COP already in a lab frame with z up.
+
+    Columns :data:`GRF_COP_CHANNELS`: ``grf_*_n`` is the force of the plate on the body, N;
+    ``cop_*_m`` the centre of pressure, m, NaN (an empty cell) where the plate carries too
+    little to define it.
+
+    Attributes
+    ----------
+    anterior_axis : {"+x", "-x", "+y", "-y"}
+        Lab axis that points in the walking direction.
+    plate_centre_m : (float, float)
+        Lab x and y of the centre of the plate surface, m: the walking-frame COP is taken
+        relative to it. The analysis does not need it when the calibration trials record the
+        COP, but where they leave it empty the platform filters cannot learn the plate's moment,
+        which is then taken as zero about this point (see :meth:`load_signals`).
+    """
+
+    type: ClassVar[str] = "grf_cop"
+    channels: ClassVar[tuple[str, ...]] = GRF_COP_CHANNELS
+    nullable: ClassVar[tuple[str, ...]] = ("cop_x_m", "cop_y_m")
+    signals: ClassVar[tuple[str, ...]] = SAGITTAL_SIGNALS
+    anterior_axis: AnteriorAxis = "+x"
+    plate_centre_m: tuple[float, float] = (0.0, 0.0)
+
+    @field_validator("plate_centre_m", mode="before")
+    @classmethod
+    def _pair(cls, value: object) -> object:
+        """Accept any sequence of two numbers (TOML array, HDF5 or MATLAB vector)."""
+        if isinstance(value, list | np.ndarray):
+            return tuple(float(v) if isinstance(v, np.floating) else v for v in list(value))
+        return value
+
+    def load_signals(self, data: ArrayLike, *, axis: int = -2) -> NDArray[np.float64]:
+        """The sagittal signals, per sample: ``grf_z * cop_x`` is 0 where the COP is empty.
+
+        ``cop_x`` is relative to ``plate_centre_m``. The moment is linear in the load wherever
+        the COP is recorded, so the platform filters model and remove it there; where the COP is
+        empty (an unloaded plate in processed exports) the moment is taken as zero about the
+        plate's centre, which is where the plate's own moment is smallest.
+
+        Returns an array with :data:`SAGITTAL_SIGNALS` on ``axis``.
+        """
+        c = np.moveaxis(np.asarray(data, dtype=float), axis, 0)
+        _check_count(c.shape[0], self, axis)
+        load = self.lab_load(c, axis=0)
+        moment = np.where(np.isfinite(load.cop_x), load.grf_z * load.cop_x, 0.0)
+        return np.moveaxis(np.stack([load.grf_x, load.grf_z, moment]), 0, axis)
+
+    def sagittal_matrix(self) -> NDArray[np.float64]:
+        """The identity: :meth:`load_signals` are already the sagittal signals."""
+        return sagittal_matrix(self)
+
+    def lab_load(
+        self, data: ArrayLike, *, min_fz_n: float = DEFAULT_MIN_FZ_N, axis: int = -2
+    ) -> LabLoad:
+        """GRF and COP (relative to ``plate_centre_m``) turned into the walking frame; the free
+        moment is unknown (NaN).
+
+        ``min_fz_n`` is accepted for symmetry with the linear plates and ignored: the COP is
+        as recorded.
+        """
+        c = np.moveaxis(np.asarray(data, dtype=float), axis, -1)
+        _check_count(c.shape[-1], self, axis)
+        rotation = _walking_rotation(self.anterior_axis, z_down=False)
+        grf = c[..., :3] @ rotation.T
+        cop = c[..., 3:5] - np.asarray(self.plate_centre_m)
+        cop = np.concatenate([cop, np.zeros_like(c[..., :1])], axis=-1) @ rotation.T
+        return LabLoad(
+            *np.moveaxis(grf, -1, 0), *np.moveaxis(cop, -1, 0)[:2], np.full(c.shape[:-1], np.nan)
         )
+
+
+ForcePlate = PlateGeometry | SixAxisPlate | GrfCopPlate
+"""Any plate type."""
+_PLATE_CLASSES: dict[str, type[ForcePlate]] = {
+    cls.type: cls for cls in (PlateGeometry, SixAxisPlate, GrfCopPlate)
+}
+PLATE_TYPES = tuple(_PLATE_CLASSES)
+"""The names of the plate types: ``kistler8`` (default), ``six_axis``, ``grf_cop``."""
+
+
+def plate_class(type_name: str) -> type[ForcePlate]:
+    """The class of a plate type (``"kistler8"`` -> :class:`PlateGeometry`).
+
+    Raises
+    ------
+    ParameterError
+        Naming the types when ``type_name`` is none of them.
+    """
+    try:
+        return _PLATE_CLASSES[type_name]
+    except (KeyError, TypeError):
+        raise ParameterError(
+            f"type: expected one of {', '.join(PLATE_TYPES)}, got {type_name!r}"
+        ) from None
+
+
+def _check_count(n: int, plate: ForcePlate, axis: int) -> None:
+    if n != len(plate.channels):
+        raise ParameterError(
+            f"channels: expected {len(plate.channels)} channels on axis {axis} for a "
+            f"{plate.type} plate ({', '.join(plate.channels)}), got {n}"
+        )
+
+
+_UNIT = {"x": np.array([1.0, 0.0, 0.0]), "y": np.array([0.0, 1.0, 0.0])}
+
+
+def _walking_rotation(anterior_axis: AnteriorAxis, *, z_down: bool) -> NDArray[np.float64]:
+    """Rows: the walking frame's axes (x anterior, y left, z up) in the source frame."""
+    forward = _UNIT[anterior_axis[1]] * (1.0 if anterior_axis[0] == "+" else -1.0)
+    up = np.array([0.0, 0.0, -1.0 if z_down else 1.0])
+    return np.stack([forward, np.cross(up, forward), up])
 
 
 @dataclass(frozen=True)
@@ -96,21 +323,40 @@ class SagittalLoad:
     cop_x: NDArray[np.float64]
 
 
+@dataclass(frozen=True)
+class LabLoad:
+    """GRF (plate on body), N, COP, m, and free moment about the upward vertical through the
+    COP (plate on body), N·m, in the walking frame: x anterior, y left, z up. The COP and the
+    free moment are NaN where the COP is undefined."""
+
+    grf_x: NDArray[np.float64]
+    grf_y: NDArray[np.float64]
+    grf_z: NDArray[np.float64]
+    cop_x: NDArray[np.float64]
+    cop_y: NDArray[np.float64]
+    free_moment: NDArray[np.float64]
+
+
 def resultants(
-    channels: ArrayLike, geometry: PlateGeometry, *, min_fz_n: float = 1.0, axis: int = -2
+    channels: ArrayLike,
+    geometry: PlateGeometry | SixAxisPlate,
+    *,
+    min_fz_n: float = DEFAULT_MIN_FZ_N,
+    axis: int = -2,
 ) -> Resultants:
-    """Forces, moments and centre of pressure from the 8 channels.
+    """Forces, moments and centre of pressure from a linear plate's channels.
 
     Parameters
     ----------
-    channels : array_like, shape (..., 8, ...)
-        Channel values in :data:`CHANNELS` order along ``axis``, N.
-    geometry : PlateGeometry
-        Sensor offsets of the plate.
+    channels : array_like, shape (..., n_channels, ...)
+        Channel values in ``geometry.channels`` order along ``axis`` (8 for ``kistler8``,
+        6 for ``six_axis``), N and N·m.
+    geometry : PlateGeometry or SixAxisPlate
+        The plate: sensor offsets, or the surface's offset from the moment origin.
     min_fz_n : float
         Below this vertical force the COP is undefined and returned as NaN, N.
     axis : int
-        Axis of ``channels`` that holds the 8 channels (default -2, as in
+        Axis of ``channels`` that holds the channels (default -2, as in
         ``(n_trials, n_channels, n_times)``).
 
     Returns
@@ -128,22 +374,37 @@ def resultants(
     (0.12, 0.2)
     """
     c = np.moveaxis(np.asarray(channels, dtype=float), axis, -1)
-    if c.shape[-1] != len(CHANNELS):
-        raise ParameterError(
-            f"channels: expected {len(CHANNELS)} channels on axis {axis}, got {c.shape[-1]}"
-        )
+    _check_count(c.shape[-1], geometry, axis)
     fx, fy, fz, mx, my, mz = np.moveaxis(c @ geometry.matrix().T, -1, 0)
-    with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
-        loaded = np.abs(fz) > min_fz_n
-        ax = np.where(loaded, (fx * geometry.az0_m - my) / fz, np.nan)
-        ay = np.where(loaded, (fy * geometry.az0_m + mx) / fz, np.nan)
+    ax = cop_from_moment(fx * geometry.az0_m - my, fz, min_fz_n=min_fz_n)
+    ay = cop_from_moment(fy * geometry.az0_m + mx, fz, min_fz_n=min_fz_n)
     return Resultants(fx, fy, fz, mx, my, mz, ax, ay)
+
+
+def cop_from_moment(
+    moment: ArrayLike, force_z: ArrayLike, *, min_fz_n: float = 1.0
+) -> NDArray[np.float64]:
+    """Centre of pressure ``moment / force_z``, NaN where ``|force_z| <= min_fz_n``.
+
+    Every COP of the package is computed here: a moment (N·m) about an axis through the origin,
+    divided by the vertical force (N), gives the COP coordinate (m) along the perpendicular
+    horizontal axis.
+
+    Examples
+    --------
+    >>> cop_from_moment([35.0, 0.5], [700.0, 0.5]).tolist()
+    [0.05, nan]
+    """
+    moment = np.asarray(moment, dtype=float)
+    force_z = np.asarray(force_z, dtype=float)
+    with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
+        return np.where(np.abs(force_z) > min_fz_n, moment / force_z, np.nan)
 
 
 def channels_from_load(
     force: ArrayLike,
     cop: ArrayLike,
-    geometry: PlateGeometry,
+    geometry: PlateGeometry | SixAxisPlate,
     *,
     free_moment_nm: ArrayLike = 0.0,
     axis: int = -2,
@@ -156,8 +417,8 @@ def channels_from_load(
         (Fx, Fy, Fz) applied by the load to the plate in the plate frame (z down), N.
     cop : array_like, shape (..., 2, ...)
         (ax, ay) point of application on the plate surface, m.
-    geometry : PlateGeometry
-        Sensor offsets of the plate.
+    geometry : PlateGeometry or SixAxisPlate
+        The plate.
     free_moment_nm : array_like
         Free moment about the vertical axis, N·m, broadcast against the samples.
     axis : int
@@ -166,7 +427,8 @@ def channels_from_load(
     Returns
     -------
     ndarray
-        Channels in :data:`CHANNELS` order on ``axis``, N. :func:`resultants` recovers the load.
+        Channels in ``geometry.channels`` order on ``axis``. :func:`resultants` recovers the
+        load.
 
     Examples
     --------
@@ -225,6 +487,36 @@ def sagittal_load(res: Resultants, anterior_axis: AnteriorAxis = "+x") -> Sagitt
         grf_z=res.fz,
         cop_x=sign * getattr(res, cop_name),
     )
+
+
+def sagittal_matrix(geometry: ForcePlate) -> NDArray[np.float64]:
+    """The ``(3, n_signals)`` map from a plate's load signals to :data:`SAGITTAL_SIGNALS`,
+    ``(grf_x, grf_z, grf_z * cop_x)`` in the walking frame.
+
+    For the linear plates the load signals are the channels (``(3, 8)`` for ``kistler8``,
+    ``(3, 6)`` for ``six_axis``): all three are linear in the channels (the COP times the
+    vertical force is a moment), so a trial's sagittal load can be filtered and corrected as
+    three signals and the COP taken once, with :func:`cop_from_moment`, where it is needed. The
+    rows follow :func:`resultants` and :func:`sagittal_load` for the plate's ``anterior_axis``.
+    A ``grf_cop`` plate's load signals are already the sagittal signals (the identity).
+
+    Examples
+    --------
+    >>> g = PlateGeometry(a_m=0.12, b_m=0.2, az0_m=-0.045, anterior_axis="-y")
+    >>> c = channels_from_load([0.0, -20.0, 700.0], [0.01, -0.06], g, axis=0)
+    >>> grf_x, grf_z, moment = sagittal_matrix(g) @ c
+    >>> [round(float(v), 9) for v in (grf_x, grf_z, moment / grf_z)]
+    [-20.0, 700.0, 0.06]
+    """
+    if isinstance(geometry, GrfCopPlate):
+        return np.eye(3)
+    force_name, _, sign = _ANTERIOR[geometry.anterior_axis]
+    fx, fy, fz, mx, my, _ = geometry.matrix()
+    if force_name == "fx":
+        force, moment = fx, geometry.az0_m * fx - my
+    else:
+        force, moment = fy, geometry.az0_m * fy + mx
+    return np.stack([-sign * force, fz, sign * moment])
 
 
 def ankle_torque(

@@ -17,7 +17,12 @@ from rich.console import Console
 from rich.table import Table
 
 from anklelab._atomic import write_text_atomic
-from anklelab.commands._options import SessionArgument, SettingsOption
+from anklelab.commands._options import (
+    ForceOption,
+    SessionArgument,
+    SettingsOption,
+    session_input,
+)
 from anklelab.commands._progress import recording_progress
 
 if TYPE_CHECKING:
@@ -66,25 +71,44 @@ def trials_table(session: Session, results: WalkingResults) -> list[dict[str, An
 
 
 def _summary(results: WalkingResults) -> Table:
+    """Estimate and 95 % interval per quantity and timing point; poorly determined ones in
+    brackets only (never as a precise number)."""
+    from anklelab.pipelines.walking.results import QUANTITIES
+
     table = Table(
         box=box.SIMPLE_HEAD,
-        title="walking impedance, bootstrap mean (sd)",
-        caption="cop: lever arm, cm; k: N·m/rad; b: N·m·s/rad; I: kg·m²",
+        title="walking impedance: estimate [95 % interval]",
+        caption="cop: lever arm, cm; model: stiffness constant or changing within the window; "
+        "Δ: stiffness changes within the window; ≈: poorly determined (interval spans zero or "
+        "exceeds ±50 %)",
     )
-    for column in ("condition", "n", "cop", "k", "b", "I", "VAF %"):
+    columns = ["condition", "n", "cop", "model"] + [f"{q.symbol} ({q.unit})" for q in QUANTITIES]
+    for column in columns:
         table.add_column(column, justify="right", no_wrap=True)
     for tp in results.timing_points:
-        cells = [
-            f"{np.mean(v):{fmt}} ({np.std(v, ddof=1) if v.size > 1 else 0.0:{fmt}})"
-            for v, fmt in (
-                (tp.stiffness, ".0f"),
-                (tp.damping, ".2f"),
-                (tp.inertia, ".3f"),
+        cells = []
+        for q in QUANTITIES:
+            e = getattr(tp, q.name)
+            low, high = e.ci95
+            interval = f"[{low:{q.format}}, {high:{q.format}}]"
+            cells.append(
+                f"≈ {interval}" if e.poorly_determined else f"{e.mean:{q.format}} {interval}"
             )
-        ]
-        vaf = f"{np.mean(tp.vaf):.1f}"
-        table.add_row(tp.key, str(tp.n_perturbed), f"{tp.cop_m * 100:.2f}", *cells, vaf)
+        model = tp.stiffness_model + (" Δ" if tp.stiffness_changes else "")
+        table.add_row(tp.key, str(tp.n_perturbed), f"{tp.cop_m * 100:.2f}", model, *cells)
     return table
+
+
+def _poorly_determined(results: WalkingResults) -> str:
+    """Which quantities are poorly determined at how many points ("" if none)."""
+    from anklelab.pipelines.walking.results import QUANTITIES
+
+    n = len(results.timing_points)
+    counts = {
+        q.name: sum(getattr(tp, q.name).poorly_determined for tp in results.timing_points)
+        for q in QUANTITIES
+    }
+    return ", ".join(f"{name} at {k} of {n} points" for name, k in counts.items() if k)
 
 
 def analyze(
@@ -98,25 +122,34 @@ def analyze(
         ),
     ] = None,
     seed: Annotated[
-        int | None, typer.Option(help="Bootstrap seed (overrides the settings).")
+        int | None, typer.Option(min=0, help="Bootstrap seed (overrides the settings).")
     ] = None,
     figures: Annotated[
         bool, typer.Option("--figures/--no-figures", help="Write PNG figures.")
     ] = True,
+    force: ForceOption = False,
 ) -> None:
     """Ankle stiffness, damping and inertia per timing point and direction, with bootstrap.
 
-    Writes OUT/results.json (DESIGN.md section 5), OUT/results.csv (one row per timing point and
-    direction), OUT/trials.csv (detections and drop reasons per trial) and OUT/*.png figures.
+    Writes OUT/results.json (see the result-files guide), OUT/results.csv (one row per timing
+    point and direction), OUT/trials.csv (detections and drop reasons per trial), OUT/*.png
+    figures and OUT/run.json (the record of the run: settings, input hashes, files written).
+    OUT is written whole or not at all.
     """
+    from anklelab.commands._files import output_directory
     from anklelab.data import load_session, session_hash
     from anklelab.errors import AnklelabWarning
     from anklelab.ident.irf import PlatformFilters
     from anklelab.pipelines.walking import STEPS, analyze_walking, load_walking_settings
 
+    session_input(session_path)
     settings = load_walking_settings(settings_file, seed=seed)
     filters = PlatformFilters.load(filters_file) if filters_file else None
-    with recording_progress() as task:
+    inputs = [p for p in (session_path, settings_file, filters_file) if p is not None]
+    with (
+        output_directory(out, command="analyze", force=force, inputs=inputs) as run,
+        recording_progress() as task,
+    ):
         session = load_session(session_path, progress=task(f"reading {session_path.name}"))
         step = task("analysing")
         total = len(STEPS) + 1 + figures
@@ -130,19 +163,23 @@ def analyze(
                 progress=lambda name: step(names.index(name), total),
             )
         step(len(STEPS), total)
-        out.mkdir(parents=True, exist_ok=True)
-        document = results.to_dict(
-            session=Path(session_path).name, session_sha256=session_hash(session_path)
-        )
-        write_text_atomic(out / "results.json", json.dumps(document, indent=2))
-        write_csv(out / "results.csv", results.table())
-        write_csv(out / "trials.csv", trials_table(session, results))
+        sha256 = session_hash(session_path)
+        document = results.to_dict(session=Path(session_path).name, session_sha256=sha256)
+        write_text_atomic(run.directory / "results.json", json.dumps(document, indent=2))
+        write_csv(run.directory / "results.csv", results.table())
+        write_csv(run.directory / "trials.csv", trials_table(session, results))
         if figures:
             from anklelab.report.figures_walking import save_walking_figures
 
-            save_walking_figures(results, out)
+            save_walking_figures(results, run.directory)
+        run.settings.update(settings.model_dump(mode="json"), figures=figures)
+        run.add_input(session_path, sha256)
+        run.add_input(settings_file)
+        run.add_input(filters_file)
         step(total, total)
     console = Console()
+    if not console.is_terminal:  # a log or a pipe: never fold the table's rows
+        console.width = max(console.width, 200)
     console.print(_summary(results))
     counts = results.drop_counts()
     reasons = "; ".join(f"{n} {kind}" for kind, n in counts.items())
@@ -153,6 +190,9 @@ def analyze(
         f"{f' ({reasons})' if reasons else ''} (see trials.csv); results in {out}",
         markup=False,
     )
+    vague = _poorly_determined(results)
+    if vague:
+        console.print(f"≈ poorly determined: {vague} (intervals in results.json)", markup=False)
     point_warnings = [message for tp in results.timing_points for message in tp.warnings]
     for message in (*results.warnings, *point_warnings):
         console.print(f"warning: {message}", style="yellow", markup=False)

@@ -12,6 +12,7 @@ from rich.console import Console
 from rich.markup import escape
 from rich.table import Table
 
+from anklelab.commands._options import ForceOption, SeedOption
 from anklelab.commands._progress import recording_progress
 
 if TYPE_CHECKING:
@@ -42,29 +43,34 @@ def demo(
     quick: Annotated[
         bool, typer.Option("--quick", help="Small trial counts: a check in seconds.")
     ] = False,
-    seed: Annotated[
-        int, typer.Option(min=0, help="Seed of every simulation and the bootstrap.")
-    ] = 0,
+    seed: SeedOption = 0,
+    force: ForceOption = False,
 ) -> None:
     """Run both papers' experiments on the digital twins and compare with the papers.
 
     Paper 000 (Perturberator): simulate the session, measure the servo loop, identify the
     platform filters, analyse walking and compare with the bench. Paper 001 (capstan): identify
     friction, set-point and chirp control without and with compensation, torque observer.
-    Writes OUT/ (sessions, results.json, friction.json, summary.json, report.html) and prints,
-    per paper, what the paper reported, what anklelab measured and the twin's truth.
+    Writes OUT/ (sessions, results.json, friction.json, summary.json, report.html, run.json),
+    whole or not at all, and prints, per paper, what the paper reported, what anklelab
+    measured and the twin's truth.
     """
+    from anklelab.commands._files import output_directory
     from anklelab.pipelines.demo import DemoSettings, run_capstan, run_perturberator
     from anklelab.report.demo import write_demo_report
 
-    if out.exists() and not out.is_dir():
-        raise typer.BadParameter(f"{out} exists and is not a directory", param_hint="--out")
     settings = DemoSettings.quick(seed) if quick else DemoSettings(seed=seed)
-    with recording_progress(transient=False) as task:
-        perturberator = run_perturberator(out, settings, task=task)
-        capstan = run_capstan(out, settings, task=task)
+    with (
+        output_directory(out, command="demo", force=force) as run,
+        recording_progress(transient=False) as task,
+    ):
+        perturberator = run_perturberator(run.directory, settings, task=task)
+        capstan = run_capstan(run.directory, settings, task=task)
         step = task("report: figures, summary.json, report.html")
-        report, summary, comparisons = write_demo_report(out, settings, perturberator, capstan)
+        report, summary, comparisons = write_demo_report(
+            run.directory, settings, perturberator, capstan
+        )
+        run.settings.update(settings.model_dump(mode="json"))
         step(1, 1)
     console = Console()
     if not console.is_terminal:  # a log file or pipe: wide enough for the tables not to wrap
@@ -73,5 +79,5 @@ def demo(
     console.print(_table("Paper 001, the capstan platform", comparisons["paper_001"]))
     console.print(
         f"Sessions and results in {out}/ (perturberator/, capstan/); "
-        f"all values in {summary}; open {report} in a browser."
+        f"all values in {out / summary.name}; open {out / report.name} in a browser."
     )

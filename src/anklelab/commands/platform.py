@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from enum import StrEnum
 from pathlib import Path
 from typing import Annotated, Any
 
@@ -9,6 +10,7 @@ import typer
 from rich.console import Console
 from rich.table import Table
 
+from anklelab.commands._options import ForceOption
 from anklelab.platforms import PLATFORMS, load_platform
 
 app = typer.Typer(help="Inspect platform parameter sets and their sources.", no_args_is_help=True)
@@ -65,44 +67,76 @@ def platform_markdown(name: str, file: Path | None = None) -> str:
     return "\n".join(lines) + "\n"
 
 
+Platform = StrEnum("Platform", {name: name for name in PLATFORMS})  # type: ignore[misc]
+"""A platform with a shipped parameter set."""
+
+
+PLOT_FORMATS = (".png", ".svg", ".pdf")
+
+PlatformArgument = Annotated[Platform, typer.Argument(metavar="NAME", help="The platform.")]
+ParamsOption = Annotated[
+    Path | None, typer.Option("--params", help="A parameter file to load instead.")
+]
+
+
+def _plot_path(value: Path | None) -> Path | None:
+    """Option callback: a figure file name whose suffix names a format matplotlib writes."""
+    if value is not None and value.suffix.lower() not in PLOT_FORMATS:
+        raise typer.BadParameter(
+            f"expected a file name ending in {', '.join(PLOT_FORMATS)}, got {str(value)!r}"
+        )
+    return value
+
+
 @app.command("show")
 def show(
-    name: Annotated[str, typer.Argument(help=f"Platform: {', '.join(PLATFORMS)}.")],
-    file: Annotated[Path | None, typer.Option(help="A parameter file to load instead.")] = None,
+    name: PlatformArgument,
+    params: ParamsOption = None,
     markdown: Annotated[
         bool, typer.Option("--markdown", help="Print a Markdown page instead of a table.")
     ] = False,
 ) -> None:
     """List every parameter of a platform with its value and source."""
     if markdown:
-        typer.echo(platform_markdown(name, file), nl=False)
+        typer.echo(platform_markdown(name.value, params), nl=False)
         return
-    params = load_platform(name, file)
-    table = Table(title=f"{name} parameters")
+    loaded = load_platform(name.value, params)
+    table = Table(title=f"{name.value} parameters")
     for column in ("parameter", "value", "source"):
         table.add_column(column)
-    for key, value in _leaves(params.model_dump()):
-        table.add_row(key, repr(value), params.sources.get(key, ""))
+    for key, value in _leaves(loaded.model_dump()):
+        table.add_row(key, repr(value), loaded.sources.get(key, ""))
     Console().print(table)
 
 
 @app.command("check")
 def check(
-    name: Annotated[str, typer.Argument(help=f"Platform: {', '.join(PLATFORMS)}.")],
-    file: Annotated[Path, typer.Argument(help="The parameter file to validate.")],
+    name: PlatformArgument,
+    file: Annotated[
+        Path, typer.Argument(metavar="FILE", help="The parameter file (TOML) to validate.")
+    ],
 ) -> None:
     """Validate a parameter file; exits non-zero with a message naming the bad key."""
-    load_platform(name, file)
-    typer.echo(f"{file}: valid {name} parameters")
+    load_platform(name.value, file)
+    typer.echo(f"{file}: valid {name.value} parameters")
 
 
 @app.command("bode")
 def bode(
-    file: Annotated[
-        Path | None, typer.Option(help="A perturberator parameter file to use instead.")
+    params: Annotated[
+        Path | None,
+        typer.Option("--params", help="A perturberator parameter file to use instead."),
     ] = None,
     as_json: Annotated[bool, typer.Option("--json", help="Print the figures as JSON.")] = False,
-    plot: Annotated[Path | None, typer.Option(help="Write a Bode plot to this file.")] = None,
+    plot: Annotated[
+        Path | None,
+        typer.Option(
+            metavar="FILE",
+            callback=_plot_path,
+            help=f"Write a Bode plot to this file ({', '.join(PLOT_FORMATS)}).",
+        ),
+    ] = None,
+    force: ForceOption = False,
 ) -> None:
     """Measure the Perturberator servo's position loop on the twin with a small PRBS.
 
@@ -111,12 +145,23 @@ def bode(
     about 200 Hz, 8 dB, 45 deg).
     """
     import json
+    from contextlib import nullcontext
 
+    from anklelab._atomic import atomic_file
+    from anklelab.commands._files import output_file
     from anklelab.experiments.perturberator_bode import measure_servo_bode
 
-    result = measure_servo_bode(load_platform("perturberator", file))
-    if plot is not None:
-        result.plot(plot)
+    parameters = load_platform("perturberator", params)
+    inputs = [] if params is None else [params]
+    with (
+        nullcontext()
+        if plot is None
+        else output_file(plot, force=force, inputs=inputs, option="--plot")
+    ):
+        result = measure_servo_bode(parameters)
+        if plot is not None:
+            with atomic_file(plot, overwrite=force, keep_suffix=True) as tmp:
+                result.plot(tmp)
     figures = result.summary()
     if as_json:
         typer.echo(json.dumps(figures, indent=2))

@@ -9,7 +9,7 @@ import typer
 from rich.console import Console
 from rich.table import Table
 
-from anklelab.commands._options import SessionArgument
+from anklelab.commands._options import SessionArgument, session_input
 from anklelab.commands._progress import recording_progress
 
 app = typer.Typer(help="Inspect sessions.", no_args_is_help=True)
@@ -75,6 +75,7 @@ def info(
     """Validate a session and summarise it: platform, rate, trials per timing point, truth."""
     from anklelab.data import load_session, summarize
 
+    session_input(path)
     with recording_progress() as task:
         summary = summarize(load_session(path, progress=task(f"reading {path.name}")))
     if as_json:

@@ -1,4 +1,5 @@
-"""Sessions: the in-memory model, the CSV session directory, the native HDF5 store, MATLAB.
+"""Sessions: the in-memory model, the CSV session directory, the native HDF5 store, MATLAB,
+C3D files and mapped imports of lab layouts.
 
 ::
 
@@ -10,16 +11,25 @@
 from anklelab._lazy import lazy_exports
 
 _EXPORTS = {
+    "C3DFile": "c3d",
+    "plate_load": "c3d",
+    "read_c3d": "c3d",
+    "read_c3d_files": "c3d",
+    "import_c3d": "c3d_import",
     "IdentData": "capstan_ident",
     "IdentRun": "capstan_ident",
     "read_ident_directory": "capstan_ident",
     "write_ident_directory": "capstan_ident",
     "read_directory": "directory",
     "write_directory": "directory",
+    "grf_tables": "grf",
+    "write_grf_tables": "grf",
     "H5_FORMAT": "hdf5",
     "read_hdf5": "hdf5",
     "write_hdf5": "hdf5",
+    "inspect_file": "inspect",
     "read_matlab": "matlab",
+    "import_matlab": "matlab_map",
     "BENCH_COLUMNS": "session",
     "BENCH_MANIFEST_COLUMNS": "session",
     "CALIBRATION_COLUMNS": "session",

@@ -16,23 +16,23 @@ import numpy as np
 from numpy.typing import NDArray
 
 from anklelab._params import did_you_mean, parameters_from_mapping
-from anklelab.data._tree import canonical, storable
+from anklelab.data._text import excerpt, plain_text, storable
+from anklelab.data._tree import canonical
 from anklelab.data.session import (
     BENCH_COLUMNS,
     BENCH_MANIFEST_COLUMNS,
-    CALIBRATION_COLUMNS,
     DIRECTIONS,
     SESSION_FORMAT,
-    WALKING_COLUMNS,
     WALKING_MANIFEST_COLUMNS,
     BenchTest,
     Recording,
     Session,
     SessionInfo,
     WalkingTrial,
+    label_text,
 )
 from anklelab.errors import ParameterError, SessionFormatError
-from anklelab.forceplate import PlateGeometry
+from anklelab.forceplate import PLATE_TYPES, plate_class
 
 __all__ = [
     "MAX_STEP_JITTER",
@@ -48,11 +48,10 @@ __all__ = [
     "check_unique",
     "check_walking_row",
     "check_walking_trials",
-    "excerpt",
-    "format_bytes",
     "info_from_mapping",
     "info_to_mapping",
     "sample_label",
+    "section_columns",
     "validate_session",
 ]
 
@@ -80,45 +79,6 @@ refused with a hint when it fits in centimetres or millimetres."""
 def sample_label(index: int) -> str:
     """Row label for array data: ``"sample 1"`` is the first sample (1-based)."""
     return f"sample {index + 1}"
-
-
-def excerpt(value: object, limit: int = 40, *, quote: bool = True) -> str:
-    r"""A short, escaped excerpt of ``value`` for messages, so that no message ever shows more
-    than ``limit`` characters of what a file holds.
-
-    Text is shown as its ``repr`` (control characters escaped); anything else as its ``repr``
-    too, cut to ``limit`` characters with the full length appended when longer.
-
-    Examples
-    --------
-    >>> excerpt("abc")
-    "'abc'"
-    >>> excerpt("x" * 100, 8)
-    "'xxxxxxxx…' (100 characters)"
-    >>> excerpt("a\x00b", quote=False)
-    'a\\x00b'
-    """
-    if isinstance(value, str):
-        shown = repr(value[:limit])
-        if len(value) > limit:
-            shown = f"{shown[:-1]}…{shown[-1]} ({len(value)} characters)"
-        return shown if quote else repr(value[:limit])[1:-1] + ("…" if len(value) > limit else "")
-    text = repr(value)
-    return text if len(text) <= limit else text[:limit] + "…"
-
-
-def format_bytes(n: int) -> str:
-    """``n`` bytes in binary units (``"1.5 GiB"``).
-
-    >>> format_bytes(1536), format_bytes(3 * 2**30)
-    ('1.5 KiB', '3 GiB')
-    """
-    value = float(n)
-    for unit in ("bytes", "KiB", "MiB", "GiB"):
-        if value < 1024 or unit == "GiB":
-            return f"{value:.3g} {unit}"
-        value /= 1024
-    raise AssertionError  # unreachable
 
 
 # --- session.toml -------------------------------------------------------------------------------
@@ -175,7 +135,8 @@ def info_from_mapping(data: Mapping[str, Any], origin: str, prefix: str = "") ->
         Written before each key in messages (``"session."`` for a MATLAB struct).
 
     Unknown top-level keys and tables, and unknown keys inside ``[force_plate]`` and
-    ``[geometry]``, are kept in :attr:`SessionInfo.extra`.
+    ``[geometry]``, are kept in :attr:`SessionInfo.extra`. ``[force_plate] type`` selects the
+    plate type (default ``kistler8``) and with it the keys the table needs.
     """
     from anklelab.platforms import PLATFORMS  # platforms layer; imported lazily to stay light
 
@@ -204,10 +165,17 @@ def info_from_mapping(data: Mapping[str, Any], origin: str, prefix: str = "") ->
     if not isinstance(subject, str):
         raise SessionFormatError(f"{where}subject: expected a string, got {excerpt(subject)}")
     plate = _table(data, "force_plate", origin, prefix)
-    known = PlateGeometry.model_fields
+    plate_type = plate.pop("type", "kistler8")
+    if plate_type not in PLATE_TYPES:
+        raise SessionFormatError(
+            f"{where}force_plate.type: expected one of {', '.join(PLATE_TYPES)}, got "
+            f"{excerpt(plate_type)}"
+        )
+    plate_model = plate_class(plate_type)
+    known = plate_model.model_fields
     try:
         geometry_plate = parameters_from_mapping(
-            PlateGeometry,
+            plate_model,
             {k: v for k, v in plate.items() if k in known},
             origin=f"{origin}: {prefix}force_plate",
         )
@@ -227,7 +195,7 @@ def info_from_mapping(data: Mapping[str, Any], origin: str, prefix: str = "") ->
     lengths = {
         "geometry.ankle_height_m": ankle_height,
         "geometry.heel_to_ankle_m": heel_to_ankle,
-    } | {f"force_plate.{k}": getattr(geometry_plate, k) for k in ("a_m", "b_m", "az0_m")}
+    } | {f"force_plate.{k}": getattr(geometry_plate, k, None) for k in ("a_m", "b_m", "az0_m")}
     for key, value in lengths.items():
         if value is not None:  # a plate type without this length
             _plausible(value, key, where)
@@ -264,7 +232,8 @@ def info_to_mapping(info: SessionInfo) -> dict[str, Any]:
         "subject": info.subject,
     }
     out |= {k: v for k, v in extra.items() if k not in ("force_plate", "geometry")}
-    out["force_plate"] = info.force_plate.model_dump() | extra.get("force_plate", {})
+    plate = info.force_plate
+    out["force_plate"] = {"type": plate.type} | plate.model_dump() | extra.get("force_plate", {})
     out["geometry"] = {
         "ankle_height_m": float(info.ankle_height_m),
         "heel_to_ankle_m": float(info.heel_to_ankle_m),
@@ -295,12 +264,23 @@ def check_columns(file: str, names: Iterable[str], required: tuple[str, ...], wh
         )
 
 
+def section_columns(info: SessionInfo, section: str) -> tuple[tuple[str, ...], tuple[str, ...]]:
+    """The required and the nullable columns of a section's recordings (``"calibration"``,
+    ``"walking"`` or ``"bench"``) with ``info``'s plate type."""
+    if section == "bench":
+        return BENCH_COLUMNS, ()
+    columns = info.calibration_columns if section == "calibration" else info.walking_columns
+    return columns, info.force_plate.nullable
+
+
 def check_recording(
     file: str,
     columns: Mapping[str, NDArray[np.float64]],
     required: tuple[str, ...],
     fs: float,
     row: RowLabel = sample_label,
+    *,
+    nullable: tuple[str, ...] = (),
 ) -> None:
     """Check one recording: required columns finite, time strictly increasing at ``fs``.
 
@@ -319,6 +299,9 @@ def check_recording(
         Sample rate from ``session.toml``, Hz.
     row : callable
         Maps a 0-based sample index to the label used in messages.
+    nullable : tuple of str
+        Required columns that may also hold NaN (empty cells), e.g. a ``grf_cop`` plate's COP;
+        they must not hold infinities.
     """
     check_columns(file, columns, required, "columns")
     lengths = {name: np.shape(values) for name, values in columns.items()}
@@ -332,11 +315,13 @@ def check_recording(
         raise SessionFormatError(f"{file}: {n} data row(s); expected at least 2 samples")
     for name in required:
         finite = np.isfinite(columns[name])
+        if name in nullable:
+            finite |= np.isnan(columns[name])
         if not finite.all():
             i = int(np.argmin(finite))
             raise SessionFormatError(
                 f"{file}: column {name!r}, {row(i)}: value {float(columns[name][i])!r}; "
-                "expected a finite number"
+                "expected a finite number" + (" or an empty cell" if name in nullable else "")
             )
     t = columns["time_s"]
     step = np.diff(t)
@@ -370,6 +355,10 @@ def check_recording(
         )
 
 
+def _not_finite(values: NDArray[np.float64]) -> NDArray[np.bool_]:
+    return ~np.isfinite(values)
+
+
 def check_recordings(
     files: Sequence[str],
     names: tuple[str, ...],
@@ -378,21 +367,25 @@ def check_recordings(
     lengths: NDArray[np.int64],
     required: tuple[str, ...],
     fs: float,
+    *,
+    nullable: tuple[str, ...] = (),
 ) -> None:
     """:func:`check_recording` for many recordings stored end to end, in a few array passes.
 
     Recording ``i`` is ``data[:, starts[i]:starts[i] + lengths[i]]``, its columns named by
-    ``names`` and located by ``files[i]`` in messages. When the whole block passes the checks
-    at once (every required value finite, every time step within :data:`RATE_TOLERANCE` of
-    ``1 / fs``), each recording would pass on its own; otherwise each is checked on its own,
-    in order, and the first problem is reported with the same message.
+    ``names`` and located by ``files[i]`` in messages; ``nullable`` columns may hold NaN. When
+    the whole block passes the checks at once (every required value finite, or not infinite in
+    a nullable column; every time step within :data:`RATE_TOLERANCE` of ``1 / fs``), each
+    recording would pass on its own; otherwise each is checked on its own, in order, and the
+    first problem is reported with the same message.
     """
     if not len(files):
         return
     check_columns(files[0], names, required, "columns")
     period = 1.0 / fs
-    ok = bool(lengths.min() >= 2) and all(
-        np.isfinite(data[names.index(name)]).all() for name in required
+    valid = {name: np.isinf if name in nullable else _not_finite for name in required}
+    ok = bool(lengths.min() >= 2) and not any(
+        bad(data[names.index(name)]).any() for name, bad in valid.items()
     )
     if ok:
         step = np.diff(data[names.index("time_s")])
@@ -401,7 +394,7 @@ def check_recordings(
     if not ok:
         for file, start, n in zip(files, starts, lengths, strict=True):
             columns = {name: data[j, start : start + n] for j, name in enumerate(names)}
-            check_recording(file, columns, required, fs)
+            check_recording(file, columns, required, fs, nullable=nullable)
 
 
 # --- manifests ----------------------------------------------------------------------------------
@@ -477,25 +470,14 @@ def check_bench_tests(file: str, tests: Iterable[tuple[BenchTest, str]]) -> None
 # --- whole sessions (before writing) ------------------------------------------------------------
 
 
-def _plain_text(text: object) -> bool:
-    """Non-empty text every store can hold, without surrounding spaces or line breaks."""
-    return (
-        isinstance(text, str)
-        and bool(text)
-        and text == text.strip()
-        and "\n" not in text
-        and storable(text)
-    )
-
-
 def _check_names(where: str, recording: Recording) -> None:
-    if not _plain_text(recording.name):
+    if not plain_text(recording.name):
         raise SessionFormatError(
             f"{where}: recording name {excerpt(recording.name)}; expected non-empty text "
             "without surrounding spaces, line breaks or NUL characters"
         )
     for name in recording.columns:
-        if not _plain_text(name):
+        if not plain_text(name):
             raise SessionFormatError(
                 f"{where}: column name {excerpt(name)}; expected non-empty text without "
                 "surrounding spaces, line breaks or NUL characters"
@@ -506,7 +488,7 @@ def _check_extra(where: str, extra: Mapping[str, str], reserved: tuple[str, ...]
     for key, value in extra.items():
         if (
             key in reserved
-            or not _plain_text(key)
+            or not plain_text(key)
             or not isinstance(value, str)
             or not storable(value)
         ):
@@ -526,22 +508,26 @@ def validate_session(session: Session, origin: str = "session") -> None:
             canonical(tree or {})
         except ValueError as exc:
             raise SessionFormatError(f"{origin}.{name}: {exc}") from None
-    fs = session.info.sample_rate_hz
+    info = session.info
+    fs, nullable = info.sample_rate_hz, info.force_plate.nullable
     for i, rec in enumerate(session.calibration):
         where = f"{origin}.calibration[{i}] {excerpt(rec.name)}"
         _check_names(where, rec)
-        check_recording(where, rec.columns, CALIBRATION_COLUMNS, fs)
+        check_recording(where, rec.columns, info.calibration_columns, fs, nullable=nullable)
     labelled = []
     for i, trial in enumerate(session.walking):
         where = f"{origin}.walking[{i}] {excerpt(trial.recording.name)}"
+        label_text(trial.trial, f"{where}: trial")
         check_walking_row(where, trial.perturbed, trial.direction, trial.delay_ms)
         _check_names(where, trial.recording)
         _check_extra(where, trial.extra, WALKING_MANIFEST_COLUMNS)
-        check_recording(where, trial.recording.columns, WALKING_COLUMNS, fs)
+        columns = trial.recording.columns
+        check_recording(where, columns, info.walking_columns, fs, nullable=nullable)
         labelled.append((trial, f"walking[{i}]"))
     check_walking_trials(f"{origin}.walking", labelled)
     for i, test in enumerate(session.bench):
         where = f"{origin}.bench[{i}] {excerpt(test.recording.name)}"
+        label_text(test.test, f"{where}: test")
         _check_names(where, test.recording)
         _check_extra(where, test.extra, BENCH_MANIFEST_COLUMNS)
         check_recording(where, test.recording.columns, BENCH_COLUMNS, fs)

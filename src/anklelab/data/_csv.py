@@ -13,13 +13,15 @@ from __future__ import annotations
 
 import csv
 import io
+import math
 import re
 from collections.abc import Callable
 
 import numpy as np
 from numpy.typing import NDArray
 
-from anklelab.data._checks import check_columns, excerpt
+from anklelab.data._checks import check_columns
+from anklelab.data._text import excerpt
 from anklelab.errors import SessionFormatError
 
 __all__ = ["NUMBER", "decode", "header", "parse_numeric"]
@@ -73,17 +75,19 @@ def _data_lines(data: bytes) -> list[int]:
     return [k + 1 for k, line in enumerate(data.split(b"\n")) if k > 0 and line.strip()]
 
 
-def _fast(data: bytes, names: list[str]) -> NDArray[np.float64] | None:
-    """pyarrow's parse, as (columns, rows); ``None`` if pyarrow refuses the file.
+def _fast(data: bytes, names: list[str], nullable: tuple[str, ...]) -> NDArray[np.float64] | None:
+    """pyarrow's parse, as (columns, rows); ``None`` if pyarrow refuses the file or finds an
+    empty cell outside the ``nullable`` columns.
 
     The text is parsed block by block straight into an array sized by its line count, so the
-    peak memory is the text, the array and one block.
+    peak memory is the text, the array and one block. Empty cells read as NaN.
     """
     import pyarrow as pa
     import pyarrow.csv as pacsv
 
     out = np.empty((len(names), data.count(b"\n") + 1))
     rows = 0
+    allow = [name in nullable for name in names]
     try:
         with pacsv.open_csv(
             pa.BufferReader(data),
@@ -91,14 +95,16 @@ def _fast(data: bytes, names: list[str]) -> NDArray[np.float64] | None:
             parse_options=pacsv.ParseOptions(newlines_in_values=False),
             convert_options=pacsv.ConvertOptions(
                 column_types=dict.fromkeys(names, pa.float64()),
-                null_values=[],
+                null_values=[""] if nullable else [],
                 strings_can_be_null=False,
-                quoted_strings_can_be_null=False,
+                quoted_strings_can_be_null=bool(nullable),
             ),
         ) as reader:
             for batch in reader:
                 n = batch.num_rows
-                for row, column in zip(out, batch.columns, strict=True):
+                for row, column, ok in zip(out, batch.columns, allow, strict=True):
+                    if column.null_count and not ok:
+                        return None  # the row-by-row parse names the empty cell
                     row[rows : rows + n] = column.to_numpy(zero_copy_only=False)
                 rows += n
     except (pa.ArrowInvalid, pa.ArrowNotImplementedError):
@@ -106,9 +112,12 @@ def _fast(data: bytes, names: list[str]) -> NDArray[np.float64] | None:
     return out[:, :rows]
 
 
-def _slow(path: object, data: bytes, names: list[str]) -> tuple[NDArray[np.float64], list[int]]:
+def _slow(
+    path: object, data: bytes, names: list[str], nullable: tuple[str, ...]
+) -> tuple[NDArray[np.float64], list[int]]:
     """Row-by-row parse with :mod:`csv`: the values as (columns, rows) and each row's line, or
-    the first problem as a :class:`SessionFormatError`."""
+    the first problem as a :class:`SessionFormatError`. Empty cells of ``nullable`` columns
+    read as NaN."""
     nul = data.find(b"\x00")
     if nul >= 0:
         line = data.count(b"\n", 0, nul) + 1
@@ -129,13 +138,20 @@ def _slow(path: object, data: bytes, names: list[str]) -> tuple[NDArray[np.float
                     f"{path}: line {line} has {len(fields)} fields; expected {len(names)} like the "
                     "header (line 1)"
                 )
+            values = []
             for name, field in zip(names, fields, strict=True):
-                if not NUMBER.fullmatch(field.strip(_SPACE)):
-                    got = "an empty cell" if not field.strip() else excerpt(field)
+                cell = field.strip(_SPACE)
+                if not cell and name in nullable:
+                    values.append(math.nan)
+                    continue
+                if not NUMBER.fullmatch(cell):
+                    got = "an empty cell" if not cell else excerpt(field)
+                    empty = " or an empty cell" if name in nullable else ""
                     raise SessionFormatError(
-                        f"{path}: column {name!r}, line {line}: {got}; expected a number"
+                        f"{path}: column {name!r}, line {line}: {got}; expected a number{empty}"
                     )
-            rows.append([float(field) for field in fields])
+                values.append(float(cell))
+            rows.append(values)
             lines.append(line)
     except csv.Error as exc:
         raise SessionFormatError(
@@ -145,10 +161,11 @@ def _slow(path: object, data: bytes, names: list[str]) -> tuple[NDArray[np.float
 
 
 def parse_numeric(
-    path: object, data: bytes, names: list[str]
+    path: object, data: bytes, names: list[str], nullable: tuple[str, ...] = ()
 ) -> tuple[NDArray[np.float64], Callable[[int], str]]:
     """The numbers below the header of ``data``, one row per column, and a function naming the
-    CSV line of a data row (0-based) for messages.
+    CSV line of a data row (0-based) for messages. Empty cells of the ``nullable`` columns
+    (e.g. a ``grf_cop`` plate's COP) read as NaN; anywhere else they are an error.
 
     Raises
     ------
@@ -156,7 +173,7 @@ def parse_numeric(
         Naming the file, the CSV line and the column of the first cell that is not a number, or
         a row whose field count differs from the header's.
     """
-    values = _fast(data, names)
+    values = _fast(data, names, nullable)
     if values is not None and b"\n\n" not in data and b"\n\r\n" not in data:
 
         def line(i: int) -> str:  # no blank lines: row i is on line i + 2 (the text is let go)
@@ -171,7 +188,7 @@ def parse_numeric(
             return f"line {lines[i]}"
 
     else:
-        values, found = _slow(path, data, names)
+        values, found = _slow(path, data, names, nullable)
 
         def line(i: int) -> str:
             return f"line {found[i]}"

@@ -12,7 +12,7 @@ import os
 import stat
 from pathlib import Path
 
-from anklelab.data._checks import excerpt, format_bytes
+from anklelab.data._text import excerpt, format_bytes
 from anklelab.errors import SessionFormatError
 
 __all__ = [

@@ -19,7 +19,7 @@ from pathlib import Path
 
 import h5py
 
-from anklelab.data._checks import excerpt, format_bytes
+from anklelab.data._text import excerpt, format_bytes
 from anklelab.errors import SessionFormatError
 
 __all__ = ["H5_ERRORS", "MAX_SESSION_BYTES", "check_h5_file", "damaged", "open_h5"]

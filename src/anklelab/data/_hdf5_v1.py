@@ -5,9 +5,11 @@
     /                       attribute format = "anklelab-h5/1"
     /session                the session.toml document (keys as attributes, tables as groups)
     /calibration/<file>     one group per recording, one float64 dataset per column
-    /walking/<file>         same, with attributes trial, perturbed, direction, delay_ms and any
-                            further manifest columns (strings)
-    /bench/<file>           same, with attributes test, distance_m and further manifest columns
+    /walking/<file>         same, with attributes trial (an integer, or text since labels are
+                            text), perturbed, direction, delay_ms and any further manifest
+                            columns (strings)
+    /bench/<file>           same, with attributes test (a label like trial's), distance_m and
+                            further manifest columns
     /truth                  optional ground-truth tree (groups, datasets, attributes)
     /provenance             provenance tree
 
@@ -30,19 +32,18 @@ from anklelab.data._checks import (
     check_walking_trials,
     excerpt,
     info_from_mapping,
+    section_columns,
 )
 from anklelab.data._progress import Progress, ticker
 from anklelab.data._tree import read_h5_tree, unlink_name
 from anklelab.data.session import (
-    BENCH_COLUMNS,
     BENCH_MANIFEST_COLUMNS,
-    CALIBRATION_COLUMNS,
-    WALKING_COLUMNS,
     WALKING_MANIFEST_COLUMNS,
     BenchTest,
     Recording,
     Session,
     WalkingTrial,
+    label_text,
 )
 from anklelab.errors import SessionFormatError
 
@@ -83,7 +84,6 @@ def _attr(where: str, attrs: dict[str, Any], key: str, kind: type) -> Any:
         raise SessionFormatError(f"{where}: attribute {key!r} is missing")
     value = attrs[key]
     ok = {
-        int: isinstance(value, np.integer),
         bool: isinstance(value, np.bool_ | bool),
         str: isinstance(value, str),
         float: isinstance(value, np.floating | float),
@@ -93,6 +93,13 @@ def _attr(where: str, attrs: dict[str, Any], key: str, kind: type) -> Any:
             f"{where}: attribute {key!r} = {excerpt(value)}; expected a {kind.__name__}"
         )
     return kind(value)
+
+
+def _label(where: str, attrs: dict[str, Any], key: str) -> str:
+    """A trial or test label: text, or an integer (files written before labels were text)."""
+    if key not in attrs:
+        raise SessionFormatError(f"{where}: attribute {key!r} is missing")
+    return label_text(attrs[key], f"{where}: attribute {key!r}")
 
 
 def _extra(attrs: dict[str, Any], known: tuple[str, ...]) -> dict[str, str]:
@@ -115,26 +122,27 @@ def read_v1(f: h5py.File, path: Path, progress: Progress | None) -> Session:
     sections = {name: _section(f, name) for name in ("calibration", "walking", "bench")}
     tick = ticker(progress, sum(len(g) for g in sections.values() if g is not None))
 
-    def recording(section: str, link: str, group: h5py.Group, required: tuple[str, ...]):
+    def recording(section: str, link: str, group: h5py.Group) -> tuple[str, Recording]:
         where = f"{path}:/{section}/{link}"
         if not isinstance(group, h5py.Group):
             raise SessionFormatError(f"{where}: expected a group (one recording)")
         columns = _columns(where, group)
-        check_recording(where, columns, required, fs)
+        required, nullable = section_columns(info, section)
+        check_recording(where, columns, required, fs, nullable=nullable)
         tick()
         return where, Recording(unlink_name(link), columns)
 
     calibration = []
     if (section := sections["calibration"]) is not None:
         for link, group in section.items():
-            calibration.append(recording("calibration", link, group, CALIBRATION_COLUMNS)[1])
+            calibration.append(recording("calibration", link, group)[1])
     walking = []
     if (section := sections["walking"]) is not None:
         for link, group in section.items():
-            where, rec = recording("walking", link, group, WALKING_COLUMNS)
+            where, rec = recording("walking", link, group)
             attrs = dict(group.attrs)
             trial = WalkingTrial(
-                trial=_attr(where, attrs, "trial", int),
+                trial=_label(where, attrs, "trial"),
                 recording=rec,
                 perturbed=_attr(where, attrs, "perturbed", bool),
                 direction=_attr(where, attrs, "direction", str),  # type: ignore[arg-type]
@@ -147,10 +155,10 @@ def read_v1(f: h5py.File, path: Path, progress: Progress | None) -> Session:
     bench = []
     if (section := sections["bench"]) is not None:
         for link, group in section.items():
-            where, rec = recording("bench", link, group, BENCH_COLUMNS)
+            where, rec = recording("bench", link, group)
             attrs = dict(group.attrs)
             test = BenchTest(
-                test=_attr(where, attrs, "test", int),
+                test=_label(where, attrs, "test"),
                 recording=rec,
                 distance_m=_attr(where, attrs, "distance_m", float),
                 extra=_extra(attrs, _BENCH_ATTRS),

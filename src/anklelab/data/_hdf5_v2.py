@@ -24,18 +24,17 @@ from anklelab.data._checks import (
     check_walking_trials,
     excerpt,
     info_from_mapping,
+    section_columns,
 )
 from anklelab.data._digest import sha256_tree, update, update_array_header
 from anklelab.data._progress import Progress, ticker
 from anklelab.data._tree import read_h5_tree
 from anklelab.data.session import (
-    BENCH_COLUMNS,
-    CALIBRATION_COLUMNS,
-    WALKING_COLUMNS,
     BenchTest,
     Recording,
     Session,
     WalkingTrial,
+    label_text,
 )
 from anklelab.errors import SessionFormatError
 
@@ -45,7 +44,6 @@ __all__ = [
     "MANIFEST",
     "SECTIONS",
     "content_hash",
-    "label_from_text",
     "layout_digest",
     "read_v2",
 ]
@@ -59,25 +57,6 @@ MANIFEST = {
     "walking": ("file", "trial", "perturbed", "direction", "delay_ms", "extra", *INDEX),
     "bench": ("file", "test", "distance_m", "extra", *INDEX),
 }
-REQUIRED = {
-    "calibration": CALIBRATION_COLUMNS,
-    "walking": WALKING_COLUMNS,
-    "bench": BENCH_COLUMNS,
-}
-
-
-def label_from_text(text: str) -> int | str:
-    """A stored label as the session holds it: an integer if ``text`` is one in canonical
-    decimal form, else the text.
-
-    >>> label_from_text("12"), label_from_text("012"), label_from_text("d060_1")
-    (12, '012', 'd060_1')
-    """
-    try:
-        number = int(text)
-    except ValueError:
-        return text
-    return number if str(number) == text else text
 
 
 def content_hash(parts: dict[str, str | None]) -> str:
@@ -210,8 +189,10 @@ def _recordings(
     layouts: Layouts,
     required: tuple[str, ...],
     fs: float,
+    nullable: tuple[str, ...],
 ) -> list[Recording]:
-    """Every recording of a section, checked, as views into its layout's data."""
+    """Every recording of a section, checked, as views into its layout's data (``nullable``
+    columns may hold NaN)."""
     files = manifest["file"]
     layout, start, length = (np.asarray(manifest[k]) for k in INDEX)
     if any(a.dtype.kind not in "iu" for a in (layout, start, length)):
@@ -232,7 +213,7 @@ def _recordings(
             )
 
         located = [f"{where}/{files[i]}" for i in members]
-        check_recordings(located, names, data, expected, lengths, required, fs)
+        check_recordings(located, names, data, expected, lengths, required, fs, nullable=nullable)
         for i, (s, n) in zip(members, zip(expected, lengths, strict=True), strict=True):
             out[i] = Recording(files[i], {c: data[j, s : s + n] for j, c in enumerate(names)})
     missing = [files[i] for i, r in enumerate(out) if r is None]
@@ -256,10 +237,10 @@ def _extra(text: str, where: str) -> dict[str, str]:
     return extra
 
 
-def _labels(values: Any, where: str, column: str) -> list[int | str]:
+def _labels(values: Any, where: str, column: str) -> list[str]:
     if not isinstance(values, tuple):
         raise SessionFormatError(f"{where}/manifest/{column}: expected text labels")
-    return [label_from_text(v) for v in values]
+    return [label_text(v, f"{where}/manifest/{column}, row {i + 1}") for i, v in enumerate(values)]
 
 
 def _walking(
@@ -346,12 +327,14 @@ def read_v2(f: h5py.File, path: Path, progress: Progress | None) -> Session:
         )
 
     info = info_from_mapping(session_tree, str(path), "/session/")
-    fs = info.sample_rate_hz
     tick = ticker(progress, sum(len(m["file"]) for m, _ in stored.values()))
     sections: dict[str, list[Recording]] = {}
     for name in SECTIONS:
         manifest, layouts = stored[name]
-        sections[name] = _recordings(f"{path}:/{name}", manifest, layouts, REQUIRED[name], fs)
+        required, nullable = section_columns(info, name)
+        sections[name] = _recordings(
+            f"{path}:/{name}", manifest, layouts, required, info.sample_rate_hz, nullable
+        )
         for _ in sections[name]:
             tick()
 

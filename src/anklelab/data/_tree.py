@@ -29,6 +29,8 @@ from typing import Any
 import h5py
 import numpy as np
 
+from anklelab.data._text import storable
+
 __all__ = [
     "canonical",
     "create_group",
@@ -36,7 +38,6 @@ __all__ = [
     "h5_scalar",
     "link_name",
     "read_h5_tree",
-    "storable",
     "to_json",
     "tree_differences",
     "unlink_name",
@@ -62,15 +63,6 @@ def canonical(tree: Mapping[str, Any], path: str = "") -> dict[str, Any]:
             raise ValueError(f"{path}{key!r}: keys must be non-empty UTF-8 strings without NUL")
         out[key] = _value(value, f"{path}{key}")
     return out
-
-
-def storable(text: str) -> bool:
-    """Whether HDF5, JSON and TOML files can all hold ``text`` (UTF-8, no NUL)."""
-    try:
-        text.encode("utf-8")
-    except UnicodeEncodeError:  # a lone surrogate
-        return False
-    return "\x00" not in text
 
 
 def _value(value: Any, path: str) -> Any:

@@ -25,8 +25,8 @@ import numpy as np
 from numpy.typing import NDArray
 
 from anklelab._atomic import atomic_directory
-from anklelab.data._checks import excerpt
 from anklelab.data._files import MAX_JSON_BYTES
+from anklelab.data._text import excerpt
 from anklelab.data.directory import (
     SessionReader,
     _manifest,

@@ -4,15 +4,17 @@
 
     session_dir/
       session.toml          format, platform, sample_rate_hz, subject, [force_plate], [geometry]
-      calibration/*.csv     time_s, motor_angle, fx12 ... fz4          (read in natural name order)
+      calibration/*.csv     time_s, motor_angle, plate channels    (read in natural name order)
       walking/trials.csv    trial, file, perturbed (0/1), direction (dorsi|plantar|none), delay_ms
-      walking/<file>.csv    time_s, motor_angle, ankle_angle, fx12 ... fz4
+      walking/<file>.csv    time_s, motor_angle, ankle_angle, plate channels
       bench/tests.csv       test, file, distance_m
       bench/<file>.csv      time_s, displacement_m, force_n
       truth.json            optional: the twin's ground truth (arrays as lists)
       provenance.json       optional: how the session was made
 
-Each folder is optional; a folder that exists must be complete. Unknown columns are kept
+The plate channels are those of the session's plate type (``[force_plate] type``: ``fx12 ...
+fz4`` for ``kistler8``, see :mod:`anklelab.forceplate`); trial and test labels are text. Each
+folder is optional; a folder that exists must be complete. Unknown columns are kept
 (recordings: as float columns; manifests: as strings in ``extra``), unknown files are ignored.
 Error messages name the file, the column and the CSV **line** (line 1 is the header).
 
@@ -70,19 +72,19 @@ from anklelab.data._tree import from_json, to_json
 from anklelab.data.session import (
     BENCH_COLUMNS,
     BENCH_MANIFEST_COLUMNS,
-    CALIBRATION_COLUMNS,
-    WALKING_COLUMNS,
     WALKING_MANIFEST_COLUMNS,
     BenchTest,
     Recording,
     Session,
     WalkingTrial,
+    label_text,
 )
 from anklelab.errors import SessionFormatError
 
 __all__ = [
     "SessionReader",
     "directory_hash",
+    "files_hash",
     "read_csv_recording",
     "read_directory",
     "read_session_toml",
@@ -146,16 +148,23 @@ class SessionReader:
         return digest.hexdigest()
 
 
-def _recording(path: Path, data: bytes, required: tuple[str, ...], fs: float) -> Recording:
+def _recording(
+    path: Path, data: bytes, required: tuple[str, ...], fs: float, nullable: tuple[str, ...]
+) -> Recording:
     names = header(path, data, required)
-    values, line = parse_numeric(path, data, names)
+    values, line = parse_numeric(path, data, names, nullable)
     columns = dict(zip(names, values, strict=True))
-    check_recording(str(path), columns, required, fs, line)
+    check_recording(str(path), columns, required, fs, line, nullable=nullable)
     return Recording(path.name, columns)
 
 
 def read_csv_recording(
-    path: Path, required: tuple[str, ...], fs: float, *, reader: SessionReader | None = None
+    path: Path,
+    required: tuple[str, ...],
+    fs: float,
+    *,
+    nullable: tuple[str, ...] = (),
+    reader: SessionReader | None = None,
 ) -> Recording:
     """Read and check one recording file.
 
@@ -167,12 +176,14 @@ def read_csv_recording(
         Columns that must be present (others are kept).
     fs : float
         Sample rate from ``session.toml``, Hz; the ``time_s`` column must agree with it.
+    nullable : tuple of str
+        Required columns whose cells may be empty (read as NaN).
     reader : SessionReader, optional
         The session's reader (the file must lie inside its directory); by default the file's
         own folder.
     """
     reader = reader or SessionReader(path.parent)
-    return _recording(path, reader.bytes(path, MAX_CSV_BYTES), required, fs)
+    return _recording(path, reader.bytes(path, MAX_CSV_BYTES), required, fs, nullable)
 
 
 def _read_manifest(
@@ -202,16 +213,12 @@ def _read_manifest(
     return rows
 
 
-def _integer(text: str, where: str, column: str) -> int:
-    try:
-        value = float(text) if NUMBER.fullmatch(text) else math.nan
-    except OverflowError:
-        value = math.nan
-    if not value.is_integer():
+def _label(text: str, where: str, column: str) -> str:
+    if not text:
         raise SessionFormatError(
-            f"{where}, column {column!r}: got {excerpt(text)}; expected an integer"
+            f"{where}, column {column!r}: empty cell; expected a label (any non-empty text)"
         )
-    return int(value)
+    return label_text(text, f"{where}, column {column!r}")
 
 
 def _float(text: str, where: str, column: str, *, empty_ok: bool = False) -> float:
@@ -255,11 +262,11 @@ def _manifest_rows(
 
 def _walking_rows(reader: SessionReader, folder: Path) -> list[Row]:
     rows: list[Row] = []
-    ids: list[tuple[int, str]] = []
+    ids: list[tuple[str, str]] = []
     for line, where, row, path, extra in _manifest_rows(
         reader, folder, "trials.csv", WALKING_MANIFEST_COLUMNS
     ):
-        trial = _integer(row["trial"], where, "trial")
+        trial = _label(row["trial"], where, "trial")
         perturbed = _flag(row["perturbed"], where, "perturbed")
         direction = row["direction"].lower()
         delay = _float(row["delay_ms"], where, "delay_ms", empty_ok=True)
@@ -280,11 +287,11 @@ def _walking_rows(reader: SessionReader, folder: Path) -> list[Row]:
 
 def _bench_rows(reader: SessionReader, folder: Path) -> list[Row]:
     rows: list[Row] = []
-    ids: list[tuple[int, str]] = []
+    ids: list[tuple[str, str]] = []
     for line, where, row, path, extra in _manifest_rows(
         reader, folder, "tests.csv", BENCH_MANIFEST_COLUMNS
     ):
-        test = _integer(row["test"], where, "test")
+        test = _label(row["test"], where, "test")
         distance = _float(row["distance_m"], where, "distance_m")
         check_distance(where, distance)
         ids.append((test, line))
@@ -381,6 +388,13 @@ def directory_hash(path: str | Path) -> str:
     return reader.sha256(plan.files(reader.root))
 
 
+def files_hash(root: str | Path, files: Iterable[Path]) -> str:
+    """SHA-256 (hex) over ``files``, regular files inside the directory ``root``, in the order
+    given: each as its path relative to ``root`` and the SHA-256 of its bytes (as
+    :func:`directory_hash` pins a session directory), for importers that read other layouts."""
+    return SessionReader(Path(root)).sha256(files)
+
+
 def _read_directory(path: str | Path, progress: Progress | None) -> tuple[Session, str]:
     """The session and the SHA-256 of every file read (:func:`directory_hash`)."""
     reader = _reader(path)
@@ -389,19 +403,23 @@ def _read_directory(path: str | Path, progress: Progress | None) -> tuple[Sessio
     )
     plan = _plan(reader)
     fs = info.sample_rate_hz
+    nullable = info.force_plate.nullable
     jobs = [
-        *((p, CALIBRATION_COLUMNS) for p in plan.calibration),
-        *((p, WALKING_COLUMNS) for p, _ in plan.walking),
-        *((p, BENCH_COLUMNS) for p, _ in plan.bench),
+        *((p, info.calibration_columns, nullable) for p in plan.calibration),
+        *((p, info.walking_columns, nullable) for p, _ in plan.walking),
+        *((p, BENCH_COLUMNS, ()) for p, _ in plan.bench),
     ]
     tick = ticker(progress, len(jobs))
+
+    def read(job: tuple[Path, tuple[str, ...], tuple[str, ...]]) -> Recording:
+        path, required, nulls = job
+        return read_csv_recording(path, required, fs, nullable=nulls, reader=reader)
+
     with ThreadPoolExecutor(max_workers=_WORKERS) as pool:  # pyarrow parses without the GIL
         try:
             trees = {name: pool.submit(_json_tree, reader, p) for name, p in plan.trees.items()}
             recordings = []
-            for recording in pool.map(
-                lambda job: read_csv_recording(*job, fs, reader=reader), jobs
-            ):
+            for recording in pool.map(read, jobs):
                 recordings.append(recording)
                 tick()
             truth = trees["truth"].result() if "truth" in trees else None

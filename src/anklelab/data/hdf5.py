@@ -29,16 +29,20 @@ file bytes); the root's ``content_sha256`` hashes the parts' hashes. The reader 
 them and reports a mismatch as corruption, naming the file and the part. ``content_sha256``
 therefore pins everything a session holds; :func:`h5_content_hash` returns it.
 
-Labels are stored as text: an integer label is written in decimal and read back as an integer
-(:func:`label_from_text`). No timestamps are stored and trees are written in sorted order, so
-saving the same session twice gives byte-identical files. Writing goes to a temporary file
-beside the target, renamed into place when complete. Files of the first layout
-(``anklelab-h5/1``, :mod:`anklelab.data._hdf5_v1`) are still read.
+Trial and test labels are text (an integer label in older files reads as its decimal text);
+the plate type travels in ``/session`` with the rest of ``session.toml``. No timestamps are
+stored and trees are written in sorted order, so saving the same session twice gives
+byte-identical files. The file is built in memory, then written to a temporary file beside the
+target and renamed into place when complete (HDF5 itself cannot fail cleanly on a full disk: it
+reports the error when the file is closed and may crash the interpreter; a plain write raises
+``OSError``). Files of the first layout (``anklelab-h5/1``, :mod:`anklelab.data._hdf5_v1`) are
+still read.
 """
 
 from __future__ import annotations
 
 import hashlib
+import io
 import json
 from collections.abc import Callable, Sequence
 from pathlib import Path
@@ -58,7 +62,6 @@ from anklelab.data._hdf5_v2 import (
     MANIFEST,
     SECTIONS,
     content_hash,
-    label_from_text,
     read_v2,
 )
 from anklelab.data._progress import Progress
@@ -71,7 +74,6 @@ __all__ = [
     "H5_FORMATS",
     "h5_content_hash",
     "is_hdf5",
-    "label_from_text",
     "read_hdf5",
     "write_hdf5",
 ]
@@ -204,10 +206,8 @@ def write_hdf5(
         "walking": [t.recording for t in walking],
         "bench": [b.recording for b in bench],
     }
-    with (
-        atomic_file(target, overwrite=overwrite) as tmp,
-        h5py.File(tmp, "w", track_order=True) as f,
-    ):
+    image = io.BytesIO()  # HDF5 cannot fail cleanly on a full disk: it writes to memory
+    with h5py.File(image, "w", track_order=True) as f:
         f.attrs["format"] = H5_FORMAT
         parts: dict[str, str | None] = {
             "session": _write_tree(f, "session", info_to_mapping(session.info))
@@ -224,6 +224,8 @@ def write_hdf5(
             if digest is not None:
                 f.attrs[f"sha256_{name}"] = digest
         f.attrs["content_sha256"] = content_hash(parts)
+    with atomic_file(target, overwrite=overwrite) as tmp:
+        tmp.write_bytes(image.getbuffer())
     return target
 
 
@@ -278,11 +280,11 @@ def read_hdf5(path: str | Path, *, progress: Progress | None = None) -> Session:
 
 def h5_content_hash(path: str | Path) -> str | None:
     """The ``content_sha256`` an ``anklelab-h5/2`` file stores (verified whenever the session is
-    read), or ``None`` for files of the older layout."""
+    read), or ``None`` for any other HDF5 file (the older layout, or not a session)."""
     path = Path(path)
     try:
         with open_h5(path, "an anklelab HDF5 session") as f:
-            if _format(f, path) != H5_FORMAT:
+            if f.attrs.get("format") != H5_FORMAT:
                 return None
             value = f.attrs.get("content_sha256")
     except H5_ERRORS as exc:

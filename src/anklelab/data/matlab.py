@@ -10,12 +10,13 @@ manifest names; vectors may be rows or columns)::
       .subject               'S01'
       .force_plate           struct: a_m, b_m, az0_m, anterior_axis ('+x' ...)
       .geometry              struct: ankle_height_m, heel_to_ankle_m
-      .calibration           1xN struct array: time_s, motor_angle, fx12 ... fz4 [, file]
-      .walking               1xN struct array: trial, perturbed (0/1 or logical),
-                             direction ('dorsi'|'plantar'|'none'), delay_ms (NaN or [] when
-                             unperturbed), time_s, motor_angle, ankle_angle, fx12 ... fz4 [, file]
-      .bench                 1xN struct array: test, distance_m, time_s, displacement_m,
-                             force_n [, file]
+      .calibration           1xN struct array: time_s, motor_angle, plate channels [, file]
+      .walking               1xN struct array: trial (label: text or an integer), perturbed
+                             (0/1 or logical), direction ('dorsi'|'plantar'|'none'), delay_ms
+                             (NaN or [] when unperturbed), time_s, motor_angle, ankle_angle,
+                             plate channels [, file]
+      .bench                 1xN struct array: test (label), distance_m, time_s,
+                             displacement_m, force_n [, file]
       (any other field)      kept in SessionInfo.extra
 
 In MATLAB::
@@ -24,16 +25,19 @@ In MATLAB::
         'delay_ms', 225, 'time_s', t, 'motor_angle', m, 'ankle_angle', a, 'fx12', fx12, ...);
     save('session.mat', 'session')            % or save(..., '-v7.3')
 
-``file`` names the recording (defaults: ``calibration_001.csv``, ``trial_0001.csv`` from the trial
-id, ``test_001.csv``). In a recording struct every numeric vector as long as ``time_s`` is a
-column (unknown ones are kept); other unknown scalar or text fields of walking and bench
-elements are kept as manifest extras. Files up to v7 are read with :func:`scipy.io.loadmat`,
+The plate channels are those of ``force_plate.type`` (``fx12 ... fz4`` for the default
+``kistler8``). ``file`` names the recording (defaults: ``calibration_001.csv``;
+``trial_0001.csv`` and ``test_001.csv`` from an integer label, ``<label>.csv`` from a text
+one). In a recording struct every numeric vector as long as ``time_s`` is a column (unknown
+ones are kept); other unknown scalar or text fields of walking and bench elements are kept as
+manifest extras. Files up to v7 are read with :func:`scipy.io.loadmat`,
 v7.3 files (HDF5) with h5py. Errors name the MATLAB field, e.g. ``session.walking(3).fz1``.
 """
 
 from __future__ import annotations
 
 import math
+import re
 from collections.abc import Callable, Iterator
 from pathlib import Path
 from typing import Any
@@ -53,12 +57,11 @@ from anklelab.data._h5safe import H5_ERRORS, check_h5_file, damaged, open_h5
 from anklelab.data._progress import Progress, ticker
 from anklelab.data.session import (
     BENCH_COLUMNS,
-    CALIBRATION_COLUMNS,
-    WALKING_COLUMNS,
     BenchTest,
     Recording,
     Session,
     WalkingTrial,
+    label_text,
 )
 from anklelab.errors import SessionFormatError
 
@@ -143,33 +146,51 @@ def _h5_value(
     return data.item() if data.ndim == 0 else data
 
 
-def _load(path: Path) -> tuple[Any, list[str]]:
-    """The variable ``session`` of a MAT file as plain values (``None`` if absent), and the
-    names of the file's variables. Only ``session`` is read."""
+def _load(path: Path, only: str | None = None) -> dict[str, Any]:
+    """The top-level variables of a MAT file as plain values; with ``only``, just that one (no
+    other variable is read).
+
+    Raises
+    ------
+    SessionFormatError
+        When the file cannot be read (a v7.3 file: any link, alias, oversized dataset, reference
+        cycle or damage, see :func:`~anklelab.data._h5safe.check_h5_file`), or has no variable
+        ``only`` (naming the variables it has).
+    """
     if h5py.is_hdf5(str(path)):  # v7.3
         try:
             with open_h5(path, "a MATLAB v7.3 file") as f:
                 check_h5_file(f, path)
                 names = [k for k in f if not k.startswith("#")]
-                if "session" not in names:
-                    return None, names
-                return _h5_value(f["session"], f, f"{path}: session", frozenset()), names
+                _require(path, only, names)
+                return {
+                    k: _h5_value(f[k], f, f"{path}: {k}", frozenset())
+                    for k in ([only] if only else names)
+                }
         except SessionFormatError:
             raise
         except H5_ERRORS as exc:
             raise damaged(path, exc) from None
         except RecursionError:
-            raise SessionFormatError(f"{path}: session: values nested too deeply") from None
+            raise SessionFormatError(f"{path}: values nested too deeply") from None
     import scipy.io  # only for pre-v7.3 files; slow to import
 
     try:
         names = [name for name, _, _ in scipy.io.whosmat(str(path))]
-        variables = scipy.io.loadmat(str(path), simplify_cells=True, variable_names=["session"])
+        _require(path, only, names)
+        return scipy.io.loadmat(str(path), simplify_cells=True, variable_names=only and [only])
+    except SessionFormatError:
+        raise
     except Exception as exc:  # scipy raises many types for a file that is not a MAT file
         raise SessionFormatError(
             f"{path}: cannot read as a MAT file ({excerpt(str(exc), 100, quote=False)})"
         ) from None
-    return variables.get("session"), names
+
+
+def _require(path: Path, name: str | None, names: list[str]) -> None:
+    if name is not None and name not in names:
+        found = ", ".join(excerpt(k, 40, quote=False) for k in names) or "none"
+        raise SessionFormatError(f"{path}: no variable {name!r} (found: {found})")
 
 
 # --- building the session -----------------------------------------------------------------------
@@ -202,10 +223,24 @@ def _scalar(value: Any, where: str, kind: Callable[[Any], Any], expected: str) -
     raise SessionFormatError(f"{where}: expected {expected}, got {excerpt(value)}")
 
 
+def _label(value: Any, where: str) -> str:
+    """A label: a char array, or an integer-valued number (its decimal text)."""
+    if isinstance(value, str):
+        return label_text(value, where)
+    return str(_scalar(value, where, _integer, "a label (text or an integer)"))
+
+
 def _integer(number: float) -> int:
     if not float(number).is_integer():
         raise ValueError
     return int(number)
+
+
+def _default_name(label: str, prefix: str, digits: int) -> str:
+    """``trial_0003.csv`` for an integer label, else the label made a plain file name."""
+    if label.isdigit():
+        return f"{prefix}_{int(label):0{digits}d}.csv"
+    return re.sub(r"[^A-Za-z0-9._-]", "_", label).lstrip(".") + ".csv"
 
 
 def _flag(number: float) -> bool:
@@ -227,8 +262,13 @@ def _text(value: Any, where: str) -> str:
 
 
 def _split(
-    element: dict[str, Any], where: str, required: tuple[str, ...], meta: tuple[str, ...], fs: float
-) -> tuple[Recording | None, dict[str, Any], dict[str, str]]:
+    element: dict[str, Any],
+    where: str,
+    required: tuple[str, ...],
+    meta: tuple[str, ...],
+    fs: float,
+    nullable: tuple[str, ...] = (),
+) -> tuple[Recording, dict[str, Any], dict[str, str]]:
     """Columns, known manifest fields and extra manifest fields of one struct element."""
     time = np.asarray(element.get("time_s", np.empty(0)))
     n = time.size
@@ -254,7 +294,7 @@ def _split(
     for key in meta:
         if key not in known:
             raise SessionFormatError(f"{where}.{key}: field is missing")
-    check_recording(where, columns, required, fs)
+    check_recording(where, columns, required, fs, nullable=nullable)
     return Recording("", columns), known, extra
 
 
@@ -275,15 +315,12 @@ def read_matlab(path: str | Path, *, progress: Progress | None = None) -> Sessio
     path = Path(path)
     if not path.is_file():
         raise SessionFormatError(f"{path}: file not found")
-    root, names = _load(path)
-    if root is None:
-        found = ", ".join(excerpt(k, 40, quote=False) for k in names) or "none"
-        raise SessionFormatError(f"{path}: no variable 'session' (found: {found})")
+    root = _load(path, "session")["session"]
     if not isinstance(root, dict):
         raise SessionFormatError(f"{path}: session: expected a scalar struct")
     meta = {k: v for k, v in root.items() if k not in _SECTIONS}
     info = info_from_mapping(meta, str(path), "session.")
-    fs = info.sample_rate_hz
+    fs, nullable = info.sample_rate_hz, info.force_plate.nullable
     sections = {}
     for section in _SECTIONS:
         items = _elements(root.get(section, np.empty(0)), f"{path}: session.{section}")
@@ -301,17 +338,18 @@ def read_matlab(path: str | Path, *, progress: Progress | None = None) -> Sessio
 
     calibration = []
     for i, (where, _, element) in enumerate(elements("calibration")):
-        rec, known, _ = _split(element, where, CALIBRATION_COLUMNS, (), fs)
+        rec, known, _ = _split(element, where, info.calibration_columns, (), fs, nullable)
         name = _name(known, where, f"calibration_{i + 1:03d}.csv")
         calibration.append(Recording(name, rec.columns))
     walking = []
     for where, label, element in elements("walking"):
         fields = ("trial", "perturbed", "direction", "delay_ms")
-        rec, known, extra = _split(element, where, WALKING_COLUMNS, fields, fs)
-        trial_id = _scalar(known["trial"], f"{where}.trial", _integer, "an integer")
+        rec, known, extra = _split(element, where, info.walking_columns, fields, fs, nullable)
+        trial_id = _label(known["trial"], f"{where}.trial")
+        name = _name(known, where, _default_name(trial_id, "trial", 4))
         trial = WalkingTrial(
             trial=trial_id,
-            recording=Recording(_name(known, where, f"trial_{trial_id:04d}.csv"), rec.columns),
+            recording=Recording(name, rec.columns),
             perturbed=_scalar(known["perturbed"], f"{where}.perturbed", _flag, "0 or 1"),
             direction=_text(known["direction"], f"{where}.direction"),  # type: ignore[arg-type]
             delay_ms=_delay(known["delay_ms"], f"{where}.delay_ms"),
@@ -323,10 +361,11 @@ def read_matlab(path: str | Path, *, progress: Progress | None = None) -> Sessio
     bench = []
     for where, label, element in elements("bench"):
         rec, known, extra = _split(element, where, BENCH_COLUMNS, ("test", "distance_m"), fs)
-        test_id = _scalar(known["test"], f"{where}.test", _integer, "an integer")
+        test_id = _label(known["test"], f"{where}.test")
+        name = _name(known, where, _default_name(test_id, "test", 3))
         test = BenchTest(
             test=test_id,
-            recording=Recording(_name(known, where, f"test_{test_id:03d}.csv"), rec.columns),
+            recording=Recording(name, rec.columns),
             distance_m=_scalar(known["distance_m"], f"{where}.distance_m", float, "a number"),
             extra=extra,
         )

@@ -17,7 +17,9 @@ from typing import Any, Literal
 import numpy as np
 from numpy.typing import NDArray
 
-from anklelab.forceplate import CHANNELS, PlateGeometry
+from anklelab.data._text import excerpt, plain_text
+from anklelab.errors import SessionFormatError
+from anklelab.forceplate import CHANNELS, ForcePlate
 
 __all__ = [
     "BENCH_COLUMNS",
@@ -32,16 +34,45 @@ __all__ = [
     "Session",
     "SessionInfo",
     "WalkingTrial",
+    "label_text",
 ]
 
 SESSION_FORMAT = "anklelab-session/1"
 CALIBRATION_COLUMNS = ("time_s", "motor_angle", *CHANNELS)
+"""Required calibration columns with the default ``kistler8`` plate (see
+:attr:`SessionInfo.calibration_columns` for any plate type)."""
 WALKING_COLUMNS = ("time_s", "motor_angle", "ankle_angle", *CHANNELS)
+"""Required walking columns with the default ``kistler8`` plate (see
+:attr:`SessionInfo.walking_columns`)."""
 BENCH_COLUMNS = ("time_s", "displacement_m", "force_n")
 WALKING_MANIFEST_COLUMNS = ("trial", "file", "perturbed", "direction", "delay_ms")
 BENCH_MANIFEST_COLUMNS = ("test", "file", "distance_m")
 DIRECTIONS = ("dorsi", "plantar", "none")
 Direction = Literal["dorsi", "plantar", "none"]
+
+
+def label_text(value: object, where: str = "label") -> str:
+    """A trial or bench-test label as text: any non-empty text without surrounding spaces,
+    line breaks or NUL characters; an integer becomes its decimal text (``12`` -> ``"12"``).
+
+    Raises
+    ------
+    SessionFormatError
+        Naming ``where`` when ``value`` is neither.
+
+    Examples
+    --------
+    >>> label_text(12), label_text("d060_1")
+    ('12', 'd060_1')
+    """
+    if isinstance(value, int | np.integer) and not isinstance(value, bool | np.bool_):
+        return str(int(value))
+    if plain_text(value):
+        return value  # type: ignore[return-value]
+    raise SessionFormatError(
+        f"{where}: got {excerpt(value)}; expected a label (non-empty text without surrounding "
+        "spaces, line breaks or NUL characters, or an integer)"
+    )
 
 
 @dataclass(frozen=True)
@@ -56,8 +87,8 @@ class SessionInfo:
         Sampling rate of every recording, Hz.
     subject : str
         Subject or specimen label.
-    force_plate : PlateGeometry
-        Sensor offsets and mounting of the force plate.
+    force_plate : PlateGeometry, SixAxisPlate or GrfCopPlate
+        The force plate: its type (which channels the recordings hold), geometry and mounting.
     ankle_height_m : float
         Height ``dz`` of the ankle centre above the plate surface, m.
     heel_to_ankle_m : float
@@ -69,10 +100,20 @@ class SessionInfo:
     platform: str
     sample_rate_hz: float
     subject: str
-    force_plate: PlateGeometry
+    force_plate: ForcePlate
     ankle_height_m: float
     heel_to_ankle_m: float
     extra: Mapping[str, Any] = field(default_factory=dict)
+
+    @property
+    def calibration_columns(self) -> tuple[str, ...]:
+        """Required columns of a calibration recording with this session's plate."""
+        return ("time_s", "motor_angle", *self.force_plate.channels)
+
+    @property
+    def walking_columns(self) -> tuple[str, ...]:
+        """Required columns of a walking recording with this session's plate."""
+        return ("time_s", "motor_angle", "ankle_angle", *self.force_plate.channels)
 
 
 @dataclass(frozen=True)
@@ -112,31 +153,42 @@ class Recording:
 class WalkingTrial:
     """A walking recording with its row of ``walking/trials.csv``.
 
-    ``delay_ms`` is the intended timing point after heel contact (NaN when unperturbed); the
-    real heel contact and perturbation onset are detected from the data, never taken from here.
+    ``trial`` is the trial's label: any non-empty text unique within the session (an integer is
+    stored as its decimal text). ``delay_ms`` is the intended timing point after heel contact
+    (NaN when unperturbed); the real heel contact and perturbation onset are detected from the
+    data, never taken from here.
     ``extra`` holds any further manifest columns of this row, as the strings read.
     """
 
-    trial: int
+    trial: str
     recording: Recording
     perturbed: bool
     direction: Direction
     delay_ms: float
     extra: Mapping[str, str] = field(default_factory=dict)
 
+    def __post_init__(self) -> None:
+        if isinstance(self.trial, int | np.integer):
+            object.__setattr__(self, "trial", label_text(self.trial))
+
 
 @dataclass(frozen=True)
 class BenchTest:
     """A testing-machine recording with its row of ``bench/tests.csv``.
 
-    ``distance_m`` is the actuator's distance along the foot, m; ``extra`` holds any further
-    manifest columns of this row, as the strings read.
+    ``test`` is the test's label (text, like a trial's); ``distance_m`` is the actuator's
+    distance along the foot, m; ``extra`` holds any further manifest columns of this row, as the
+    strings read.
     """
 
-    test: int
+    test: str
     recording: Recording
     distance_m: float
     extra: Mapping[str, str] = field(default_factory=dict)
+
+    def __post_init__(self) -> None:
+        if isinstance(self.test, int | np.integer):
+            object.__setattr__(self, "test", label_text(self.test))
 
 
 @dataclass(frozen=True)

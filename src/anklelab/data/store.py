@@ -75,7 +75,7 @@ def session_hash(path: str | Path) -> str:
     - A native ``anklelab-h5/2`` file: its ``content_sha256``, the SHA-256 over every value it
       stores (metadata, manifests, channel data, truth, provenance), which :func:`load_session`
       verifies on every read.
-    - Any other file (MATLAB, ``anklelab-h5/1``): the SHA-256 of its bytes.
+    - Any other file (MATLAB, ``anklelab-h5/1``, a C3D file): the SHA-256 of its bytes.
 
     Examples
     --------
@@ -85,10 +85,11 @@ def session_hash(path: str | Path) -> str:
     'e3b0c44298fc'
     """
     path = Path(path)
-    kind = session_kind(path)
-    if kind == "dir":
+    if path.is_dir():
         return directory_hash(path)
-    if kind == "h5" and (content := h5_content_hash(path)) is not None:
+    if not path.is_file():
+        session_kind(path)  # names what the path is instead
+    if is_hdf5(path) and (content := h5_content_hash(path)) is not None:
         return content
     return _file_digest(path)
 

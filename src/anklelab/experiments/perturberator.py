@@ -25,11 +25,13 @@ Ground truth (``Session.truth``, SI units):
   ``theta²`` and damping by ``theta'²``, ``theta`` the true perturbation of the ankle angle
   (the trial minus the same trial simulated without perturbation); then averaged over the
   trials. For the prosthetic foot the stiffness is the bench law at ``cop_m`` (the law is
-  linear). Also ``n_trials``, ``onset_sd_ms`` (sd of true onset minus true heel contact),
-  ``window_ms``, and ``stiffness_fit_nm_per_rad``, ``damping_fit_nms_per_rad``,
-  ``inertia_fit_kgm2``: a least-squares fit of ``T = I th'' + b th' + k th`` to the exact
-  trial-averaged perturbation torque and angle over the window (shows how far the fit itself
-  departs from the weighted reference when stiffness changes within the window).
+  linear). ``stiffness_change_fraction``: how much the stiffness changes over the window,
+  ``(k(end) - k(start)) / k``, mean over the trials. Also ``n_trials``, ``onset_sd_ms`` (sd
+  of true onset minus true heel contact), ``window_ms``, and ``stiffness_fit_nm_per_rad``,
+  ``damping_fit_nms_per_rad``, ``inertia_fit_kgm2``: a least-squares fit of
+  ``T = I th'' + b th' + k th`` to the exact trial-averaged perturbation torque and angle over
+  the window (shows how far the fit itself departs from the weighted reference when stiffness
+  changes within the window).
 - ``trials``: per walking trial in session order, ``heel_contact_s`` (vertical GRF crossing
   25 N) and ``onset_s`` (first step of the perturbation's motion plan; NaN if unperturbed or
   refused), both in the trial file's time.
@@ -581,7 +583,8 @@ def _reference(
             w = theta**2
             wr = rate**2
             cop = np.sum(w * nominal.lever_arm_m[rows, cols], axis=1) / w.sum(axis=1)
-            k = np.sum(w * nominal.stiffness_nm_per_rad[rows, cols], axis=1) / w.sum(axis=1)
+            k_window = nominal.stiffness_nm_per_rad[rows, cols]
+            k = np.sum(w * k_window, axis=1) / w.sum(axis=1)
             b = np.sum(wr * nominal.damping_nms_per_rad[rows, cols], axis=1) / wr.sum(axis=1)
             lag_ms = (onset[idx] - heel_contact[idx]) * 1000
             wide = first[:, None] + np.arange(-MARGIN, width + MARGIN)
@@ -591,6 +594,7 @@ def _reference(
                 "damping_nms_per_rad": float(b.mean()),
                 "inertia_kgm2": foot.inertia_kgm2,
                 "cop_m": float(cop.mean()),
+                "stiffness_change_fraction": float(np.mean((k_window[:, -1] - k_window[:, 0]) / k)),
                 "n_trials": int(idx.size),
                 "onset_sd_ms": float(lag_ms.std(ddof=1)) if idx.size > 1 else 0.0,
                 "window_ms": float(window_ms),

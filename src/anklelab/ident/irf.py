@@ -18,9 +18,10 @@ the resonance of the drivetrain that carries it).
 from __future__ import annotations
 
 import json
+import math
 from collections.abc import Mapping, Sequence
 from pathlib import Path
-from typing import Any, Literal
+from typing import Any, Literal, get_args
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -468,8 +469,9 @@ class PlatformFilters:
         """Rebuild fitted filters from :meth:`to_dict` output; errors name ``origin`` and key."""
         if data.get("format") != FILTERS_FORMAT:
             raise ParameterError(
-                f"{origin}: format: expected {FILTERS_FORMAT!r}, got {data.get('format')!r}"
+                f"{origin}: format: expected {FILTERS_FORMAT!r}, got {data.get('format')!r:.40}"
             )
+        _check_scalars(data, origin)
         try:
             filters = cls(
                 data["inputs"],
@@ -503,3 +505,27 @@ class PlatformFilters:
         """Read filters written by :meth:`save`."""
         data = read_parameter_document(path, "json", what="filter file")
         return cls.from_dict(data, origin=str(path))
+
+
+def _check_scalars(data: Mapping[str, Any], origin: str) -> None:
+    """The scalar settings of a filter file: positive integers, a positive finite rate and
+    cutoff, a known method (a file edited by hand must fail here, not deep in the analysis)."""
+    for key in ("n_lags", "angle_lags", "filter_order", "derivative_window", "order"):
+        value = data.get(key, 1)
+        if isinstance(value, bool) or not isinstance(value, int) or value < 1:
+            raise ParameterError(f"{origin}: {key}: expected a positive integer, got {value!r:.40}")
+    for key in ("cutoff_hz", "fs_hz"):
+        value = data.get(key, 1.0)
+        if (
+            isinstance(value, bool)
+            or not isinstance(value, int | float)
+            or not 0 < value < math.inf
+        ):
+            raise ParameterError(
+                f"{origin}: {key}: expected a positive finite number, got {value!r:.40}"
+            )
+    if data.get("method", "pinv") not in get_args(Method):
+        raise ParameterError(
+            f"{origin}: method: expected one of {', '.join(get_args(Method))}, "
+            f"got {data.get('method')!r:.40}"
+        )

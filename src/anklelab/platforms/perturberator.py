@@ -123,7 +123,9 @@ class ForcePlateParameters(PlateGeometry):
     noise_n: float = NonNegative
     top_plate_mass_kg: float = Positive
     top_plate_inertia_kgm2: float = Positive
+    top_plate_com_x_m: float
     top_plate_com_z_m: float = Field(lt=0)
+    yaw_rad: float = Field(ge=-0.1, le=0.1)
     range_vertical_n: float = Positive
     range_horizontal_n: float = Positive
 
@@ -271,6 +273,8 @@ class HumanAnkleParameters(Parameters):
     knots_s: tuple[float, ...] = Field(min_length=2)
     stiffness_nm_per_rad_per_kg: tuple[float, ...] = Field(min_length=2)
     damping_nms_per_rad_per_kg: float = NonNegative
+    stiffness_lever_arm_gain_per_m: float
+    reference_lever_arm_m: float
     inertia_kgm2: float = Positive
     angle_knots_fraction: tuple[float, ...] = Field(min_length=2)
     angle_knots_rad: tuple[float, ...] = Field(min_length=2)

@@ -210,8 +210,8 @@ def perturberator_comparison(demo: PerturberatorDemo) -> list[Comparison]:
                 f"stiffness {tp.delay_ms:g} ms (cop {100 * tp.cop_m:.1f} cm)",
                 "N·m/rad",
                 _ends(i, len(dorsi), "stiffness_first_nm_per_rad", "stiffness_last_nm_per_rad"),
-                float(np.mean(tp.stiffness)),
-                _sd(tp.stiffness),
+                tp.stiffness.mean,
+                tp.stiffness.sd,
                 ref["stiffness_nm_per_rad"],
                 fmt=".0f",
             )
@@ -228,8 +228,8 @@ def perturberator_comparison(demo: PerturberatorDemo) -> list[Comparison]:
                 fmt=".1f",
             )
         )
-    vaf = [float(np.mean(tp.vaf)) for tp in dorsi]
-    inertia = [float(np.mean(tp.inertia)) for tp in dorsi]
+    vaf = [tp.vaf.mean for tp in dorsi]
+    inertia = [tp.inertia.mean for tp in dorsi]
     rows += [
         Comparison(
             walk,
@@ -253,8 +253,7 @@ def perturberator_comparison(demo: PerturberatorDemo) -> list[Comparison]:
     ]
     for window in results.settings.sensitivity_windows_ms:
         change = [
-            100 * abs(tp.window_stiffness[f"{window:g}"] / np.mean(tp.stiffness) - 1)
-            for tp in dorsi
+            100 * abs(tp.window_stiffness[f"{window:g}"] / tp.stiffness.mean - 1) for tp in dorsi
         ]
         rows.append(
             Comparison(

@@ -111,7 +111,7 @@ def model_fit_figure(results: WalkingResults) -> Figure:
         _band(ax, t_ms, tp.torque, _COLORS[tp.direction], "measured")
         ax.plot(t_ms, tp.model_torque.mean(axis=0), "k--", lw=1.2, label="model")
         ax.set_title(
-            f"{tp.key}: k={np.mean(tp.stiffness):.0f} N·m/rad, VAF {np.mean(tp.vaf):.1f} %",
+            f"{tp.key}: k={tp.stiffness.mean:.0f} N·m/rad, VAF {tp.vaf.mean:.1f} %",
             fontsize="medium",
         )
         ax.set_xlabel("time after onset (ms)")
@@ -123,7 +123,8 @@ def model_fit_figure(results: WalkingResults) -> Figure:
 
 
 def stiffness_figure(results: WalkingResults) -> Figure:
-    """Walking stiffness against lever arm with the bench line (paper 000, Fig. 8)."""
+    """Walking stiffness (95 % intervals) against lever arm with the bench line (paper 000,
+    Fig. 8)."""
     fig, axes = _figure(1, 1, width=5.5, height=4.0)
     ax = axes[0, 0]
     if results.bench:
@@ -133,18 +134,18 @@ def stiffness_figure(results: WalkingResults) -> Figure:
     for direction, color in _COLORS.items():
         points = [tp for tp in results.timing_points if tp.direction == direction]
         if points:
+            k = np.array([tp.stiffness.mean for tp in points])
+            interval = np.array([tp.stiffness.ci95 for tp in points]).T
             ax.errorbar(
                 [tp.cop_m * 100.0 for tp in points],
-                [np.mean(tp.stiffness) for tp in points],
-                yerr=[
-                    np.std(tp.stiffness, ddof=1) if tp.stiffness.size > 1 else 0.0 for tp in points
-                ],
+                k,
+                yerr=np.abs(interval - k),
                 fmt="o",
                 color=color,
                 capsize=3,
                 label=f"walking, {direction}",
             )
-    ax.set_xlabel("lever arm cop_m / actuator distance (cm)")
+    ax.set_xlabel("lever arm / actuator distance (cm)")
     ax.set_ylabel("stiffness (N·m/rad)")
     ax.legend()
     return fig

@@ -15,16 +15,37 @@ from typing import Any
 
 from anklelab._atomic import write_text_atomic
 
-__all__ = ["Figure", "Section", "Table", "figure_png", "render_html", "write_report"]
+__all__ = [
+    "PNG_SIGNATURE",
+    "Figure",
+    "Section",
+    "Table",
+    "figure_png",
+    "render_html",
+    "write_report",
+]
+
+PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
+"""The eight bytes every PNG file starts with."""
 
 
 @dataclass(frozen=True)
 class Figure:
-    """A figure as PNG bytes with a caption."""
+    """A figure as PNG bytes with a caption.
+
+    Raises
+    ------
+    ValueError
+        ``png`` does not start with the PNG signature (only images are embedded).
+    """
 
     title: str
     png: bytes
     caption: str = ""
+
+    def __post_init__(self) -> None:
+        if not self.png.startswith(PNG_SIGNATURE):
+            raise ValueError(f"figure {self.title!r}: not PNG data")
 
 
 @dataclass(frozen=True)
@@ -132,7 +153,15 @@ def render_html(title: str, sections: Iterable[Section], metadata: Mapping[str, 
 
 
 def write_report(
-    path: str | Path, title: str, sections: Iterable[Section], metadata: Mapping[str, Any]
+    path: str | Path,
+    title: str,
+    sections: Iterable[Section],
+    metadata: Mapping[str, Any],
+    *,
+    overwrite: bool = True,
 ) -> Path:
-    """Write the report to ``path`` atomically and return the path."""
-    return write_text_atomic(path, render_html(title, sections, metadata))
+    """Write the report to ``path`` atomically and return the path.
+
+    With ``overwrite`` false an existing ``path`` raises ``FileExistsError``.
+    """
+    return write_text_atomic(path, render_html(title, sections, metadata), overwrite=overwrite)

@@ -5,32 +5,49 @@ plus its PNG figures) and/or what ``anklelab identify friction`` writes (``frict
 DESIGN.md section 6, plus its figures). :func:`results_report` turns one into a self-contained
 ``report.html``; the demo's report reuses :func:`walking_section` and :func:`friction_section`.
 
-Figures are taken from the directory as written by those commands; a figure that is missing
-(e.g. ``--no-figures``) is listed in the section's text instead.
+The report embeds only what the run wrote. A directory with a run manifest (``run.json``) gives
+its result files and figures only if the manifest lists them and their SHA-256 matches; every
+file must be a regular file inside the directory (not a symbolic link) and a figure must carry
+the PNG signature. A directory without a manifest (an older anklelab's output) is reported under
+the same file checks, with a warning. A figure that is missing (``--no-figures``) or refused is
+named in the section's text and in the returned notes instead.
 """
 
 from __future__ import annotations
 
-import json
+import os
 from collections.abc import Sequence
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from anklelab._runs import RUN_FILE, NotEmbeddable, RunManifest, read_inside
 from anklelab._version import __version__
 from anklelab.errors import ResultsFormatError
-from anklelab.report.html import Figure, Section, Table, write_report
+from anklelab.report._documents import (
+    FRICTION_KEYS,
+    WALKING_KEYS,
+    check_friction,
+    check_walking,
+    parse_document,
+)
+from anklelab.report.html import PNG_SIGNATURE, Figure, Section, Table, write_report
 
 __all__ = [
     "FRICTION_FIGURES",
     "WALKING_FIGURES",
+    "FigureSet",
     "FigureSpec",
+    "ResultFiles",
     "friction_section",
     "load_results",
-    "missing_figures",
-    "png_figures",
+    "read_figures",
     "results_report",
     "walking_section",
 ]
+
+MAX_RESULT_BYTES = 64 << 20
+MAX_FIGURE_BYTES = 32 << 20
 
 FigureSpec = tuple[str, str, str]
 """``(file stem, title, caption)`` of a figure a command writes as ``<stem>.png``."""
@@ -85,51 +102,72 @@ FRICTION_FIGURES: tuple[FigureSpec, ...] = (
 """The figures ``anklelab identify friction`` writes."""
 
 
+@dataclass(frozen=True)
+class ResultFiles:
+    """The files of a results directory that a report may use (see the module docstring).
+
+    Attributes
+    ----------
+    directory : Path
+    manifest : RunManifest or None
+        The directory's ``run.json``; ``None`` for a directory without one.
+    """
+
+    directory: Path
+    manifest: RunManifest | None = None
+
+    def read(self, name: str, *, limit: int) -> bytes:
+        """The bytes of ``name``; :class:`NotEmbeddable` says why a file may not be used."""
+        if self.manifest is not None:
+            return self.manifest.read(name, limit=limit)
+        return read_inside(self.directory, name, limit=limit)
+
+
 def load_results(path: Path, required: Sequence[str]) -> dict[str, Any]:
-    """Read a result JSON file and check that its top-level ``required`` keys are present.
+    """Read a result JSON file (a regular file) and check its top-level ``required`` keys.
 
     Raises
     ------
     ResultsFormatError
         Naming the file and what is wrong with it.
     """
+    return _load(ResultFiles(path.parent), path.name, required)
+
+
+def _load(files: ResultFiles, name: str, required: Sequence[str]) -> dict[str, Any]:
     try:
-        document = json.loads(path.read_text(encoding="utf-8"))
-    except json.JSONDecodeError as exc:
-        raise ResultsFormatError(f"{path}: not valid JSON: {exc}") from None
-    if not isinstance(document, dict):
-        raise ResultsFormatError(f"{path}: expected a JSON object, got {type(document).__name__}")
-    missing = [key for key in required if key not in document]
-    if missing:
-        raise ResultsFormatError(
-            f"{path}: missing key(s) {', '.join(missing)}; is this an anklelab result file?"
-        )
-    return document
+        data = files.read(name, limit=MAX_RESULT_BYTES)
+    except NotEmbeddable as exc:
+        raise ResultsFormatError(str(exc)) from None
+    return parse_document(data, files.directory / name, required)
 
 
-def _require(node: Any, path: Path, where: str, keys: Sequence[str]) -> dict[str, Any]:
-    """``node`` as a mapping holding ``keys``; else an error naming the file and the key."""
-    if not isinstance(node, dict):
-        raise ResultsFormatError(f"{path}: {where}: expected an object, got {node!r:.40}")
-    for key in keys:
-        if key not in node:
-            dotted = f"{where}.{key}" if where else key
-            raise ResultsFormatError(f"{path}: {dotted}: required key is missing")
-    return node
+@dataclass(frozen=True)
+class FigureSet:
+    """The figures of a section: those embedded, those missing, and those refused (why)."""
+
+    figures: list[Figure] = field(default_factory=list)
+    missing: list[str] = field(default_factory=list)
+    refused: list[str] = field(default_factory=list)
 
 
-def missing_figures(directory: Path, specs: Sequence[FigureSpec]) -> list[str]:
-    """File names of the figures of ``specs`` that are not in ``directory``."""
-    return [f"{stem}.png" for stem, _, _ in specs if not (directory / f"{stem}.png").is_file()]
-
-
-def png_figures(directory: Path, specs: Sequence[FigureSpec]) -> list[Figure]:
-    """The figures of ``specs`` found in ``directory``, in order."""
-    return [
-        Figure(title, (directory / f"{stem}.png").read_bytes(), caption)
-        for stem, title, caption in specs
-        if (directory / f"{stem}.png").is_file()
-    ]
+def read_figures(files: ResultFiles, specs: Sequence[FigureSpec]) -> FigureSet:
+    """The PNG figures of ``specs`` that ``files`` may give, in order."""
+    found = FigureSet()
+    for stem, title, caption in specs:
+        name = f"{stem}.png"
+        if not os.path.lexists(files.directory / name):
+            found.missing.append(name)
+            continue
+        try:
+            png = files.read(name, limit=MAX_FIGURE_BYTES)
+            if not png.startswith(PNG_SIGNATURE):
+                raise NotEmbeddable(f"{files.directory / name}: not a PNG image")
+        except NotEmbeddable as exc:
+            found.refused.append(f"{exc}; not embedded")
+            continue
+        found.figures.append(Figure(title, png, caption))
+    return found
 
 
 def _mean_sd(node: dict[str, Any] | None, fmt: str) -> str:
@@ -143,24 +181,33 @@ def _number(value: Any, fmt: str) -> str:
     return "—" if value is None else f"{value:{fmt}}"
 
 
-def _missing_text(missing: Sequence[str]) -> str:
-    return f"\n\nFigures not found in the directory: {', '.join(missing)}." if missing else ""
+def _figures_text(found: FigureSet) -> str:
+    text = ""
+    if found.missing:
+        text += f"\n\nFigures not found in the directory: {', '.join(found.missing)}."
+    if found.refused:
+        text += f"\n\nFigures not embedded: {'; '.join(found.refused)}."
+    return text
 
 
 def walking_section(
-    document: dict[str, Any], directory: Path, *, title: str = "Walking impedance"
+    document: dict[str, Any],
+    directory: Path,
+    *,
+    title: str = "Walking impedance",
+    figures: FigureSet | None = None,
 ) -> Section:
-    """Tables of a ``results.json`` document and the walking figures found in ``directory``."""
-    path = directory / "results.json"
-    filters = _require(document, path, "", ("platform_filters",))["platform_filters"]
-    points = document.get("timing_points")
-    if not isinstance(points, list):
-        raise ResultsFormatError(f"{path}: timing_points: expected a list, got {points!r:.40}")
+    """Tables of a ``results.json`` document and the walking figures.
+
+    ``figures`` defaults to those found in ``directory`` (regular PNG files inside it).
+    """
+    document = check_walking(document, directory / "results.json")
+    filters = document["platform_filters"]
+    points = document["timing_points"]
     settings = document.get("settings", {})
     windows = sorted({key for tp in points for key in tp.get("window_sensitivity", {})}, key=float)
     rows = []
-    for i, tp in enumerate(points):
-        _require(tp, path, f"timing_points[{i}]", ("delay_ms", "direction", "stiffness_nm_per_rad"))
+    for tp in points:
         cells = [
             f"{tp['direction']}/{tp['delay_ms']:g}",
             tp.get("n_perturbed", "—"),
@@ -242,10 +289,7 @@ def walking_section(
                 ],
             )
         )
-    figures, missing = (
-        png_figures(directory, WALKING_FIGURES),
-        missing_figures(directory, WALKING_FIGURES),
-    )
+    found = read_figures(ResultFiles(directory), WALKING_FIGURES) if figures is None else figures
     s = {
         key: settings.get(key, "?")
         for key in ("cutoff_hz", "window_ms", "bootstrap_reps", "bootstrap_fraction", "seed")
@@ -256,9 +300,9 @@ def walking_section(
         f"{document.get('anklelab_version', '?')}: low-pass {s['cutoff_hz']} Hz, window "
         f"{s['window_ms']} ms, bootstrap {s['bootstrap_reps']} × {s['bootstrap_fraction']} of the "
         f"perturbed trials (seed {s['seed']}). k: stiffness, b: damping, I: inertia, "
-        "cop: lever arm." + _missing_text(missing)
+        "cop: lever arm." + _figures_text(found)
     )
-    return Section(title, text, tables, figures)
+    return Section(title, text, tables, found.figures)
 
 
 _FRICTION_ROWS = (
@@ -273,31 +317,42 @@ _FRICTION_ROWS = (
 
 
 def friction_section(
-    document: dict[str, Any], directory: Path, *, title: str = "Friction and inertia"
+    document: dict[str, Any],
+    directory: Path,
+    *,
+    title: str = "Friction and inertia",
+    figures: FigureSet | None = None,
 ) -> Section:
-    """The identified parameters of a ``friction.json`` document and the fit figures."""
-    path = directory / "friction.json"
+    """The identified parameters of a ``friction.json`` document and the fit figures.
+
+    ``figures`` defaults to those found in ``directory`` (regular PNG files inside it).
+    """
+    document = check_friction(document, directory / "friction.json")
     rows = []
     for name, keys, unit in _FRICTION_ROWS:
         node = document
-        for depth, key in enumerate(keys):
-            node = _require(node, path, ".".join(keys[:depth]), (key,))[key]
+        for key in keys:
+            node = node[key]
         rows.append([name, unit, f"{node:.4g}"])
     fit = document.get("fit", {})
-    figures = png_figures(directory, FRICTION_FIGURES)
-    missing = missing_figures(directory, FRICTION_FIGURES)
+    found = read_figures(ResultFiles(directory), FRICTION_FIGURES) if figures is None else figures
     text = (
         "Identified at the gearhead output shaft (the capstan pinion), positive clockwise. "
         f"Spin-down fit VAF {_number(fit.get('spindown_vaf_percent'), '.2f')} %, "
         f"chirp (full model) VAF {_number(fit.get('chirp_vaf_percent'), '.2f')} %."
-        + _missing_text(missing)
+        + _figures_text(found)
     )
     return Section(
-        title, text, [Table("Identified parameters", ["parameter", "unit", "value"], rows)], figures
+        title,
+        text,
+        [Table("Identified parameters", ["parameter", "unit", "value"], rows)],
+        found.figures,
     )
 
 
-def results_report(directory: str | Path, out: str | Path | None = None) -> tuple[Path, list[str]]:
+def results_report(
+    directory: str | Path, out: str | Path | None = None, *, overwrite: bool = True
+) -> tuple[Path, list[str]]:
     """Write a self-contained report of a results directory.
 
     Parameters
@@ -307,32 +362,49 @@ def results_report(directory: str | Path, out: str | Path | None = None) -> tupl
         (``friction.json``).
     out : str or Path, optional
         The HTML file (default ``DIRECTORY/report.html``).
+    overwrite : bool
+        Replace an existing ``out``.
 
     Returns
     -------
     path : Path
         The report written.
-    missing : list of str
-        Figure files that were expected but not found.
+    notes : list of str
+        Warnings: no run manifest, figures missing or not embedded (and why).
 
     Raises
     ------
     ResultsFormatError
-        ``directory`` is not a directory, or holds neither result file, or a file is malformed.
+        ``directory`` is not a directory, or holds neither result file, or a result file is
+        malformed, not a regular file, or not the one its run wrote.
     """
     directory = Path(directory)
     if not directory.is_dir():
         raise ResultsFormatError(f"{directory}: not a directory; expected a results directory")
-    sections, missing = [], []
-    walking, friction = directory / "results.json", directory / "friction.json"
-    if walking.is_file():
-        document = load_results(walking, ("platform_filters", "timing_points"))
-        sections.append(walking_section(document, directory))
-        missing += missing_figures(directory, WALKING_FIGURES)
-    if friction.is_file():
-        document = load_results(friction, ("inertia_kgm2", "coulomb_nm", "viscous_nms_per_rad"))
-        sections.append(friction_section(document, directory))
-        missing += missing_figures(directory, FRICTION_FIGURES)
+    manifest = RunManifest.load(directory)
+    files = ResultFiles(directory, manifest)
+    notes = []
+    if manifest is None:
+        notes.append(
+            f"{directory}: no {RUN_FILE} (an older anklelab's output, or not anklelab's); "
+            "its files cannot be checked against the run that wrote them"
+        )
+    sections = []
+    for name, required, check, specs, build in (
+        ("results.json", WALKING_KEYS, check_walking, WALKING_FIGURES, walking_section),
+        ("friction.json", FRICTION_KEYS, check_friction, FRICTION_FIGURES, friction_section),
+    ):
+        if not os.path.lexists(directory / name):
+            continue
+        document = check(_load(files, name, required), directory / name)
+        found = read_figures(files, specs)
+        sections.append(build(document, directory, figures=found))
+        if found.missing:
+            notes.append(
+                f"figures not found in {directory}: {', '.join(found.missing)} "
+                "(re-run the analysis with figures to include them)"
+            )
+        notes += found.refused
     if not sections:
         nested = sorted(
             str(path.parent.relative_to(directory))
@@ -351,5 +423,12 @@ def results_report(directory: str | Path, out: str | Path | None = None) -> tupl
             f"{hint}"
         )
     out = directory / "report.html" if out is None else Path(out)
-    metadata = {"anklelab version": __version__, "results directory": directory.resolve()}
-    return write_report(out, f"anklelab report: {directory.name}", sections, metadata), missing
+    metadata: dict[str, Any] = {
+        "anklelab version": __version__,
+        "results directory": directory.resolve(),
+    }
+    if manifest is not None:
+        metadata |= {"run": f"{manifest.run_id} (`anklelab {manifest.command}`, "
+                     f"anklelab {manifest.anklelab_version})"}  # fmt: skip
+    title = f"anklelab report: {directory.name}"
+    return write_report(out, title, sections, metadata, overwrite=overwrite), notes

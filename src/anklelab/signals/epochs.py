@@ -180,11 +180,12 @@ class Trials:
 
     def bootstrap(
         self, n_reps: int = 100, fraction: float = 0.6, *, random_state: Seed = None
-    ) -> NDArray[np.float64]:
+    ) -> Trials:
         """Averages of random subsets of the trials (paper 000: 100 x 60 %).
 
         Each repetition draws ``round(fraction * n_trials)`` (at least 1) distinct trials and
-        averages them; all repetitions are one matrix product.
+        averages them; all repetitions are one matrix product. The averages come back as
+        trials (one per repetition, same channels and times, no metadata).
 
         Parameters
         ----------
@@ -197,10 +198,13 @@ class Trials:
 
         Returns
         -------
-        ndarray, shape (n_reps, n_channels, n_times)
+        Trials
+            ``n_reps`` averages, data shaped ``(n_reps, n_channels, n_times)``.
         """
         weights = bootstrap_weights(len(self), n_reps, fraction, random_state=random_state)
-        return np.tensordot(weights, self.data, axes=1)
+        return Trials(
+            np.tensordot(weights, self.data, axes=1), self.fs, self.ch_names, tmin=self.tmin
+        )
 
 
 def bootstrap_weights(

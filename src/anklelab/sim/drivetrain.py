@@ -188,7 +188,7 @@ def platform_constants(
     pc[K.H_H] = hinge_height_m
     pc[K.M_T] = fp.top_plate_mass_kg
     pc[K.I_T] = fp.top_plate_inertia_kgm2
-    pc[K.X_T] = 0.0
+    pc[K.X_T] = fp.top_plate_com_x_m
     pc[K.Z_T] = fp.top_plate_com_z_m
     pc[K.GRAV] = GRAVITY
     pc[K.DT] = 1.0 / sv.velocity_loop_rate_hz

@@ -22,15 +22,18 @@ centre-of-pressure shift. In the tilted plate's frame the load is the lab GRF ro
 and the COP is placed where the moment about the ankle equals ``T_A``:
 ``cop_x = x_ankle + (T_A - GRF_x,plate dz) / GRF_z,plate``. Hence the plate signals satisfy the
 DESIGN.md formula ``T_a = GRF_z dx + GRF_x dz`` *exactly* in the plate frame, with
-``dx = cop_x - cop_x(heel contact) - heel_to_ankle`` (the COP stays at the heel point until
-after the 25 N heel-contact threshold).
+``dx = cop_x - cop_x(heel contact) - heel_to_ankle``, heel contact being the 25 N threshold
+crossing (the ankle is placed ``heel_to_ankle`` ahead of the COP at that instant, wherever the
+COP path has moved to by then).
 
 **Stiffness laws.** The prosthetic foot's stiffness is the bench law evaluated at the nominal
 (unperturbed) lever arm ``dx_nom(t)`` (linear through ``bench.stiffness_nm_per_rad`` at
 ``bench.distances_m``, extrapolated linearly, 1300 -> 975 N·m/rad over 6-11 cm by default), so
 the response stays linear in the perturbation; damping and inertia are constants. The human
 ankle's stiffness follows published walking values through stance as a function of time after
-heel contact (scaled by body mass), damping is proportional to body mass, inertia constant.
+heel contact (scaled by body mass), optionally times ``1 + g (dx_nom - dx_ref)`` (a stiffness
+that also falls or rises with the lever arm); damping is proportional to body mass, inertia
+constant. Both laws are floored at 5 % of their reference value.
 """
 
 from __future__ import annotations
@@ -46,11 +49,12 @@ from anklelab.errors import ParameterError
 from anklelab.platforms.perturberator import PerturberatorParameters
 from anklelab.sim import _kernels as K
 from anklelab.sim.drivetrain import FootLoad
-from anklelab.sim.gait import GaitTrials, StanceSignals
+from anklelab.sim.gait import GaitTrials, StanceSignals, cop_progression_at
 
 __all__ = ["FootKind", "FootModel", "NominalStance", "foot_load", "foot_model"]
 
 FootKind = Literal["prosthetic", "human"]
+_FLOOR = 0.05  # laws never fall below this fraction of their reference stiffness
 
 
 @dataclass(frozen=True)
@@ -87,7 +91,8 @@ class FootModel:
             return bench_law(self.params, lever_arm_m)
         h = self.params.human
         per_kg = np.interp(time_after_contact_s, h.knots_s, h.stiffness_nm_per_rad_per_kg)
-        return per_kg * self.params.gait.body_mass_kg
+        lever = 1.0 + h.stiffness_lever_arm_gain_per_m * (lever_arm_m - h.reference_lever_arm_m)
+        return per_kg * self.params.gait.body_mass_kg * np.maximum(lever, _FLOOR)
 
     def damping(self, shape: tuple[int, ...]) -> NDArray:
         """Ankle damping, N·m·s/rad (constant through stance), broadcast to ``shape``."""
@@ -139,7 +144,7 @@ def bench_law(params: PerturberatorParameters, distance_m: NDArray) -> NDArray:
         lo = k[0] + (x - d[0]) * (k[1] - k[0]) / (d[1] - d[0])
         hi = k[-1] + (x - d[-1]) * (k[-1] - k[-2]) / (d[-1] - d[-2])
         out = np.where(x < d[0], lo, np.where(x > d[-1], hi, out))
-    return np.maximum(out, 0.05 * k.min())
+    return np.maximum(out, _FLOOR * k.min())
 
 
 @dataclass(frozen=True)
@@ -173,7 +178,10 @@ def foot_load(
     contact = stance.contact
     u = np.nan_to_num(stance.fraction, nan=-1.0)
     flat = (u >= p.gait.foot_flat_fraction) & (u <= p.gait.heel_off_fraction)
-    dx = np.where(contact, stance.progression - geo.heel_to_ankle_m, np.nan)
+    # the ankle sits heel_to_ankle_m ahead of the COP at (25 N) heel contact, wherever the COP
+    # path has moved to by then
+    at_contact = cop_progression_at(trials, p.gait, heel_contact_s)[:, None]
+    dx = np.where(contact, stance.progression - at_contact - geo.heel_to_ankle_m, np.nan)
     after = time_s[None, :] - heel_contact_s[:, None]
     law = foot.stiffness(np.nan_to_num(dx), after)
     k = np.where(flat, law, 0.0)

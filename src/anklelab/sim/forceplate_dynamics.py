@@ -52,21 +52,31 @@ def anti_alias_sos(cutoff_hz: float, order: int, fs: float) -> NDArray[np.float6
     return signal.butter(order, cutoff_hz, fs=fs, output="sos")
 
 
-def mounting_rotation(anterior_axis: str) -> NDArray[np.float64]:
+def mounting_rotation(anterior_axis: str, yaw_rad: float = 0.0) -> NDArray[np.float64]:
     """3x3 rotation taking sagittal-frame vectors (x anterior, y right, z down) to plate axes.
+
+    ``yaw_rad`` turns the plate about its vertical axis away from the hinge's sagittal frame:
+    the plate's anterior axis then points ``yaw_rad`` to the right of the walking direction
+    (a plate mounted slightly askew on the hinge).
 
     Examples
     --------
     >>> mounting_rotation("+y") @ [1.0, 0.0, 0.0]    # anterior is the plate's +y
     array([0., 1., 0.])
+    >>> np.round(mounting_rotation("+x", 0.1) @ [1.0, 0.0, 0.0], 4)  # seen from a yawed plate
+    array([ 0.995 , -0.0998,  0.    ])
     """
     x = {"+x": (1, 0), "-x": (-1, 0), "+y": (0, 1), "-y": (0, -1)}[anterior_axis]
     ex = np.array([x[0], x[1], 0.0])
     ey = np.cross([0.0, 0.0, 1.0], ex)  # right = down x anterior
-    return np.column_stack([ex, ey, [0.0, 0.0, 1.0]])
+    c, s = np.cos(yaw_rad), np.sin(yaw_rad)
+    yaw = np.array([[c, s, 0.0], [-s, c, 0.0], [0.0, 0.0, 1.0]])  # sagittal -> yawed plate
+    return np.column_stack([ex, ey, [0.0, 0.0, 1.0]]) @ yaw
 
 
-def sensor_channels(wrench: NDArray[np.float64], geometry: PlateGeometry) -> NDArray[np.float64]:
+def sensor_channels(
+    wrench: NDArray[np.float64], geometry: PlateGeometry, *, yaw_rad: float = 0.0
+) -> NDArray[np.float64]:
     """The eight channels that carry a sagittal-frame wrench on a plate mounted as ``geometry``.
 
     Parameters
@@ -75,6 +85,9 @@ def sensor_channels(wrench: NDArray[np.float64], geometry: PlateGeometry) -> NDA
         (Fx, Fy, Fz, Mx, My, Mz) in the sagittal plate frame, N and N·m.
     geometry : PlateGeometry
         Sensor offsets and ``anterior_axis`` of the mounted plate.
+    yaw_rad : float
+        The plate's yaw from the sagittal frame about the vertical, rad (see
+        :func:`mounting_rotation`).
 
     Returns
     -------
@@ -82,7 +95,7 @@ def sensor_channels(wrench: NDArray[np.float64], geometry: PlateGeometry) -> NDA
         Channels in :data:`anklelab.forceplate.CHANNELS` order (minimum-norm split, so
         :func:`anklelab.forceplate.resultants` returns the wrench exactly).
     """
-    r = mounting_rotation(geometry.anterior_axis)
+    r = mounting_rotation(geometry.anterior_axis, yaw_rad)
     rot = np.zeros((6, 6))
     rot[:3, :3] = r
     rot[3:, 3:] = r

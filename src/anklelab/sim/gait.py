@@ -7,9 +7,9 @@ Within a stance of duration ``T`` starting at initial contact ``t_c`` (``s = t -
     vertical  GRF_z = A W E (base + hump [exp(-((u - .25)/.12)²) + exp(-((u - .75)/.12)²)])
     fore-aft  GRF_x = -A W E sin(2 pi u) (braking for u < 1/2, propulsion after)
     lateral   GRF_y = -A W E lateral sin(pi u)                 (right foot: medial = -y)
-    COP       progression p(u) from the heel-contact point: monotone cubic (PCHIP) through
-              ``cop_knots``, scaled per trial; it stays at the heel for the first knot interval,
-              so the COP at the 25 N heel-contact threshold is the heel point.
+    COP       progression p(u) from the initial-contact point: shape-preserving cubic (PCHIP)
+              through ``cop_knots``, scaled per trial (by default it stays at the heel for the
+              first knot interval; knots may also move it from the first instant of contact).
 
 All forces are the lab-frame GRF (plate on foot; x anterior, y right, z up), zero off stance.
 Trial-to-trial variability scales stance time, loading time, GRF amplitude and COP progression
@@ -30,6 +30,7 @@ from anklelab.platforms.perturberator import GaitParameters
 __all__ = [
     "GaitTrials",
     "StanceSignals",
+    "cop_progression_at",
     "heel_contact_times",
     "sample_gait",
     "stance_signals",
@@ -158,8 +159,7 @@ def stance_signals(
     weight = params.body_mass_kg * GRAVITY * trials.amplitude[:, None]
     env = _envelope(s, trials, params)
     fore_aft = np.where(u < 0.5, params.braking_bw, params.propulsion_bw)
-    cop = PchipInterpolator(params.cop_knots_fraction, params.cop_knots_m, extrapolate=False)
-    progression = np.nan_to_num(cop(np.clip(u, 0, 1))) * trials.cop_scale[:, None]
+    progression = _progression(u, trials.cop_scale[:, None], params)
     return StanceSignals(
         grf_x=-weight * env * fore_aft * np.sin(2 * np.pi * u),
         grf_y=-weight * env * params.lateral_bw * np.sin(np.pi * np.clip(u, 0, 1)),
@@ -167,6 +167,29 @@ def stance_signals(
         progression=np.where(on, progression, 0.0),
         fraction=np.where(on, u, np.nan),
     )
+
+
+def _progression(u: NDArray, scale: NDArray, params: GaitParameters) -> NDArray:
+    """COP progression from the initial-contact point at stance fractions ``u``, m."""
+    cop = PchipInterpolator(params.cop_knots_fraction, params.cop_knots_m, extrapolate=False)
+    return np.nan_to_num(cop(np.clip(u, 0, 1))) * scale
+
+
+def cop_progression_at(
+    trials: GaitTrials, params: GaitParameters, time_s: NDArray[np.float64]
+) -> NDArray[np.float64]:
+    """COP progression of each trial at its own time ``time_s[i]`` (shape (n_trials,)), m.
+
+    Examples
+    --------
+    >>> from anklelab.platforms import load_platform
+    >>> g = load_platform("perturberator").gait
+    >>> trials = sample_gait(g, 2, 0, variability=False)
+    >>> cop_progression_at(trials, g, trials.contact_s + [0.0, g.stance_s]).round(3).tolist()
+    [0.0, 0.215]
+    """
+    u = (np.asarray(time_s) - trials.contact_s) / trials.stance_s
+    return _progression(u, trials.cop_scale, params)
 
 
 def heel_contact_times(

@@ -41,7 +41,7 @@ def force_channels(
     """Recorded force channels, shape ``(n_trials, 8, n_samples)``, N."""
     rng = np.random.default_rng(seed)
     fp = params.force_plate
-    channels = sensor_channels(wrench, fp)
+    channels = sensor_channels(wrench, fp, yaw_rad=fp.yaw_rad)
     n_trials, _, n = channels.shape
     if art.drift:
         t = np.arange(n) / params.daq.sample_rate_hz

@@ -1,0 +1,394 @@
+"""A session from a directory of per-trial C3D files and a mapping TOML (``anklelab import c3d``).
+
+The mapping (``format = "anklelab-c3d-map/1"``; documented, with an example, in the guide
+"Lab data formats") says which force platform to use and how to store it, which analog channels
+hold the motor angle and the goniometer (and a bench test's displacement and force), and where
+the trial list comes from: a CSV naming each file's role, or the files' events. Every C3D file
+must have the same analog rate (it becomes ``sample_rate_hz``) and, for the ``kistler8`` and
+``six_axis`` plate types, the same plate geometry.
+
+Plate storage (``[plate] type``):
+
+- ``kistler8`` (C3D type 3 only): the 8 channels as recorded; ``a_m``, ``b_m``, ``az0_m`` from
+  ``ORIGIN``.
+- ``six_axis`` (types 2, 3, 4; the default for 2 and 4): Fx..Mz after ``CAL_MATRIX``, in N and
+  N·m, moments about the point ``az0_m`` below the centre of the surface.
+- ``grf_cop`` (any supported type): the GRF and COP of :func:`~anklelab.data.c3d.plate_load`
+  turned into the walking frame (x along ``walking_axis``, z up), COP empty below
+  ``min_force_n``.
+
+For the first two, ``anterior_axis`` is the plate axis that ``CORNERS`` align with the lab's
+``walking_axis`` (within 10°).
+"""
+
+from __future__ import annotations
+
+import csv
+import fnmatch
+import io
+import math
+import re
+from pathlib import Path
+from typing import Literal
+
+import numpy as np
+from numpy.typing import NDArray
+from pydantic import Field
+
+from anklelab._params import Parameters
+from anklelab.data._checks import check_walking_row
+from anklelab.data._mapping import (
+    ColumnMap,
+    SessionTable,
+    import_provenance,
+    naming_the_mapping,
+    read_map,
+    session_info,
+)
+from anklelab.data.c3d import C3DFile, C3DPlate, plate_load, plate_wrench, read_c3d_files
+from anklelab.data.directory import _flag, _float  # the manifest cells' rules
+from anklelab.data.session import BenchTest, Recording, Session, WalkingTrial, label_text
+from anklelab.errors import ParameterError, SessionFormatError
+from anklelab.forceplate import CHANNELS, GRF_COP_CHANNELS, SIX_AXIS_CHANNELS
+
+__all__ = ["C3D_MAP_FORMAT", "C3DMapping", "import_c3d"]
+
+C3D_MAP_FORMAT = "anklelab-c3d-map/1"
+ALIGNMENT_DEG = 10.0
+"""Largest angle between a plate axis and the lab's walking axis for them to count as aligned."""
+WalkingAxis = Literal["+x", "-x", "+y", "-y", "+z", "-z"]
+_ROLES = ("calibration", "walking", "bench")
+
+
+class AnalogMap(ColumnMap):
+    """An analog channel by its ``ANALOG:LABELS`` entry, and its conversion."""
+
+    label: str = Field(min_length=1)
+
+
+class ChannelsTable(Parameters):
+    """``[channels.*]``: the analog channels of the non-plate columns."""
+
+    motor_angle: AnalogMap
+    ankle_angle: AnalogMap | None = None
+    displacement_m: AnalogMap | None = None
+    force_n: AnalogMap | None = None
+
+
+class PlateTable(Parameters):
+    """``[plate]``: which force platform, how the session stores it, the walking direction."""
+
+    number: int = Field(1, ge=1)
+    type: Literal["kistler8", "six_axis", "grf_cop"] | None = None
+    walking_axis: WalkingAxis
+    min_force_n: float = Field(10.0, ge=0)
+
+
+class TrialsFromCsv(Parameters):
+    """``[trials] source = "csv"``: a CSV in the C3D directory, one row per file used."""
+
+    source: Literal["csv"]
+    file: str = Field(min_length=1)
+
+
+class TrialsFromEvents(Parameters):
+    """``[trials] source = "events"``: roles and conditions from each file's events."""
+
+    source: Literal["events"]
+    calibration: tuple[str, ...] = ()
+    heel_strike: str = Field(min_length=1)
+    dorsi: str = Field(min_length=1)
+    plantar: str = Field(min_length=1)
+    timing_points_ms: tuple[float, ...] = Field(min_length=1)
+
+
+class C3DMapping(Parameters):
+    """A C3D mapping file (``format = "anklelab-c3d-map/1"``)."""
+
+    format: Literal["anklelab-c3d-map/1"]
+    session: SessionTable
+    plate: PlateTable
+    channels: ChannelsTable
+    trials: TrialsFromCsv | TrialsFromEvents = Field(discriminator="source")
+
+
+# --- the trial list -------------------------------------------------------------------------------
+
+Entry = tuple[str, Path, dict[str, str]]  # role, file, manifest fields
+
+
+def _natural(path: Path) -> list[object]:
+    return [int(p) if p.isdigit() else p for p in re.split(r"(\d+)", path.name)]
+
+
+def _entries_from_csv(root: Path, table: TrialsFromCsv) -> list[Entry]:
+    name = table.file
+    if "/" in name or "\\" in name or name in (".", ".."):
+        raise ParameterError(f"trials.file: expected a file name inside {root}, got {name!r}")
+    path = root / name
+    try:
+        text = path.read_text(encoding="utf-8-sig")
+    except (FileNotFoundError, IsADirectoryError):
+        raise SessionFormatError(f"{path}: trial list not found") from None
+    except UnicodeDecodeError:
+        raise SessionFormatError(f"{path}: not UTF-8 text; expected a CSV trial list") from None
+    rows = list(csv.reader(io.StringIO(text)))
+    header = [h.strip() for h in rows[0]] if rows else []
+    for column in ("file", "role"):
+        if column not in header:
+            raise SessionFormatError(
+                f"{path}: header (line 1) lacks the column {column!r}; expected file, role and "
+                "(walking) perturbed, direction, delay_ms, (bench) distance_m, optionally label"
+            )
+    entries, seen = [], {}
+    for line, fields in enumerate(rows[1:], start=2):
+        if not any(f.strip() for f in fields):
+            continue
+        if len(fields) != len(header):
+            raise SessionFormatError(
+                f"{path}: line {line} has {len(fields)} fields; expected {len(header)}"
+            )
+        row = {h: f.strip() for h, f in zip(header, fields, strict=True)}
+        where = f"{path}: line {line}"
+        if row["role"] not in _ROLES:
+            raise SessionFormatError(
+                f"{where}, column 'role': got {row['role']!r}; expected one of {', '.join(_ROLES)}"
+            )
+        file = row["file"]
+        if not file or "/" in file or "\\" in file or not (root / file).is_file():
+            raise SessionFormatError(f"{where}, column 'file': {file!r} is not a file in {root}")
+        if file in seen:
+            raise SessionFormatError(f"{where}: file {file!r} already listed at line {seen[file]}")
+        seen[file] = line
+        entries.append((row["role"], root / file, row | {"_where": where}))
+    if not entries:
+        raise SessionFormatError(f"{path}: no rows after the header; expected one row per file")
+    return entries
+
+
+def _entries_from_events(root: Path, table: TrialsFromEvents) -> list[Entry]:
+    files = sorted(root.glob("*.c3d"), key=_natural)
+    if not files:
+        raise SessionFormatError(f"{root}: no .c3d files")
+    return [
+        (
+            "calibration"
+            if any(fnmatch.fnmatch(p.name, g) for g in table.calibration)
+            else "walking",
+            p,
+            {"_where": str(p)},
+        )
+        for p in files
+    ]
+
+
+def _event_row(c3d: C3DFile, table: TrialsFromEvents) -> dict[str, str]:
+    """perturbed, direction and delay_ms of a walking file from its events."""
+    onsets = [e for e in c3d.events if e.label in (table.dorsi, table.plantar)]
+    if not onsets:
+        return {"perturbed": "0", "direction": "none", "delay_ms": ""}
+    onset = min(onsets, key=lambda e: e.time_s)
+    strikes = [e.time_s for e in c3d.events if e.label == table.heel_strike]
+    before = [t for t in strikes if t <= onset.time_s]
+    if not before:
+        raise SessionFormatError(
+            f"{c3d.path}: a {onset.label!r} event at {onset.time_s:g} s but no "
+            f"{table.heel_strike!r} event before it; expected the heel strike the perturbation "
+            "is timed from"
+        )
+    delay = (onset.time_s - max(before)) * 1000.0
+    points = np.array(table.timing_points_ms)
+    nearest = float(points[np.argmin(np.abs(points - delay))])
+    direction = "dorsi" if onset.label == table.dorsi else "plantar"
+    return {"perturbed": "1", "direction": direction, "delay_ms": f"{nearest:g}"}
+
+
+# --- the plate ------------------------------------------------------------------------------------
+
+
+def _axis_vector(axis: str) -> NDArray[np.float64]:
+    vector = np.zeros(3)
+    vector["xyz".index(axis[1])] = 1.0 if axis[0] == "+" else -1.0
+    return vector
+
+
+def _anterior_axis(c3d: C3DFile, plate: C3DPlate, walking_axis: str) -> str:
+    """The plate axis (``"+x"``...) that points along the lab's walking axis."""
+    axes, walk = plate.axes(), _axis_vector(walking_axis)
+    along = axes[:, :2].T @ walk
+    k = int(np.argmax(np.abs(along)))
+    angle = math.degrees(math.acos(min(1.0, abs(float(along[k])))))
+    if angle > ALIGNMENT_DEG:
+        raise SessionFormatError(
+            f"{c3d.path}: {plate.name}: no plate axis is within {ALIGNMENT_DEG:g}° of the "
+            f"walking axis {walking_axis} (closest: plate {'xy'[k]}, {angle:.0f}° away); check "
+            "[plate] walking_axis"
+        )
+    return ("+" if along[k] > 0 else "-") + "xy"[k]
+
+
+def _walking_frame(plate: C3DPlate, walking_axis: str) -> NDArray[np.float64]:
+    """Rows: x along the walking axis, y left, z up (against the plate's z), in global terms."""
+    up = -plate.axes()[:, 2]
+    forward = _axis_vector(walking_axis)
+    forward = forward - (forward @ up) * up
+    if np.linalg.norm(forward) < 0.5:
+        raise ParameterError(f"plate.walking_axis: {walking_axis} is vertical for this plate")
+    forward /= np.linalg.norm(forward)
+    return np.stack([forward, np.cross(up, forward), up])
+
+
+def _plate_columns(
+    c3d: C3DFile, table: PlateTable, kind: str
+) -> tuple[dict[str, NDArray[np.float64]], dict[str, object]]:
+    """The plate's session columns and its ``[force_plate]`` table, from one file."""
+    plate = c3d.plate(table.number)
+    if kind == "grf_cop":
+        load = plate_load(c3d, plate, min_force_n=table.min_force_n)
+        frame = _walking_frame(plate, table.walking_axis)
+        grf, cop = frame @ load.grf, frame @ (load.cop - plate.centre_m[:, None])
+        values = (*grf, *cop[:2])
+        return dict(zip(GRF_COP_CHANNELS, values, strict=True)), {"type": "grf_cop"}
+    anterior = _anterior_axis(c3d, plate, table.walking_axis)
+    force, moment, to_surface = plate_wrench(c3d, plate)
+    if kind == "kistler8":
+        if plate.type != 3:
+            raise ParameterError(
+                f"plate.type: 'kistler8' needs a C3D type-3 plate; {c3d.path} has "
+                f"{plate.name} (use 'six_axis' or 'grf_cop')"
+            )
+        origin = plate.origin_m
+        geometry = {"a_m": abs(origin[0]), "b_m": abs(origin[1]), "az0_m": -abs(origin[2])}
+        channels = c3d.analogs[list(plate.channels)]
+        columns = dict(zip(CHANNELS, channels, strict=True))
+        return columns, {"type": "kistler8", **geometry, "anterior_axis": anterior}
+    # moments about the point az0 below the surface centre (the origin's horizontal offset
+    # removed), so that the COP is relative to the centre of the plate
+    offset = np.array([to_surface[0], to_surface[1], 0.0])
+    moment = moment + np.cross(force, offset, axis=0)
+    columns = dict(zip(SIX_AXIS_CHANNELS, (*force, *moment), strict=True))
+    return columns, {"type": "six_axis", "az0_m": float(to_surface[2]), "anterior_axis": anterior}
+
+
+# --- building the session -------------------------------------------------------------------------
+
+
+def _analog(c3d: C3DFile, spec: AnalogMap | None, column: str, key: str) -> NDArray[np.float64]:
+    if spec is None:
+        raise ParameterError(f"channels.{column}: required for {key} trials but not mapped")
+    try:
+        return spec.convert(c3d.analog(spec.label), column)
+    except ParameterError as exc:
+        raise ParameterError(f"channels.{exc}") from None
+
+
+def _label(row: dict[str, str], path: Path) -> str:
+    return label_text(row.get("label") or path.stem, f"{row['_where']}, column 'label'")
+
+
+def _walking(c3d: C3DFile, row: dict[str, str], recording: Recording) -> WalkingTrial:
+    where = row["_where"]
+    perturbed = _flag(row.get("perturbed", ""), where, "perturbed")
+    direction = row.get("direction", "").lower()
+    delay = _float(row.get("delay_ms", ""), where, "delay_ms", empty_ok=True)
+    check_walking_row(where, perturbed, direction, delay)
+    known = {"file", "role", "label", "perturbed", "direction", "delay_ms", "distance_m", "_where"}
+    extra = {k: v for k, v in row.items() if k not in known}
+    return WalkingTrial(_label(row, c3d.path), recording, perturbed, direction, delay, extra)  # type: ignore[arg-type]
+
+
+def import_c3d(directory: str | Path, mapping: str | Path, *, workers: int = 2) -> Session:
+    """Read a directory of C3D trials into a session, as ``mapping`` describes.
+
+    Parameters
+    ----------
+    directory : str or Path
+        The C3D files (and the CSV trial list, if the mapping uses one).
+    mapping : str or Path
+        The mapping TOML.
+    workers : int
+        Worker processes reading the files.
+
+    Returns
+    -------
+    Session
+        ``provenance`` records the anklelab version, the importer, the directory's content hash
+        and the mapping's SHA-256.
+
+    Raises
+    ------
+    ParameterError
+        A malformed mapping (naming the key).
+    SessionFormatError
+        A malformed file or trial list (naming the file and the row, label or parameter).
+    """
+    root, mapping = Path(directory), Path(mapping)
+    if not root.is_dir():
+        raise SessionFormatError(f"{root}: not a directory; expected a directory of C3D files")
+    spec = read_map(mapping, C3DMapping, C3D_MAP_FORMAT)
+    with naming_the_mapping(mapping):
+        return _import(root, mapping, spec, workers)
+
+
+def _import(root: Path, mapping: Path, spec: C3DMapping, workers: int) -> Session:
+    if isinstance(spec.trials, TrialsFromCsv):
+        entries = _entries_from_csv(root, spec.trials)
+    else:
+        entries = _entries_from_events(root, spec.trials)
+    files = read_c3d_files([path for _, path, _ in entries], workers=workers)
+    first = files[0]
+    rate = first.analog_rate_hz
+    kind = spec.plate.type or {3: "kistler8"}.get(first.plate(spec.plate.number).type, "six_axis")
+    plate_table: dict[str, object] | None = None
+    calibration: list[Recording] = []
+    walking: list[WalkingTrial] = []
+    bench: list[BenchTest] = []
+    for (role, path, row), c3d in zip(entries, files, strict=True):
+        if not math.isclose(c3d.analog_rate_hz, rate, rel_tol=1e-9):
+            raise SessionFormatError(
+                f"{path}: analog rate {c3d.analog_rate_hz:g} Hz; expected {rate:g} Hz like "
+                f"{first.path.name} (one sample rate per session)"
+            )
+        columns = {"time_s": c3d.time_s}
+        if role == "bench":
+            columns["displacement_m"] = _analog(
+                c3d, spec.channels.displacement_m, "displacement_m", role
+            )
+            columns["force_n"] = _analog(c3d, spec.channels.force_n, "force_n", role)
+            distance = _float(row.get("distance_m", ""), row["_where"], "distance_m")
+            bench.append(
+                BenchTest(_label(row, path), Recording(f"{path.stem}.csv", columns), distance)
+            )
+            continue
+        columns["motor_angle"] = _analog(c3d, spec.channels.motor_angle, "motor_angle", role)
+        if role == "walking":
+            columns["ankle_angle"] = _analog(c3d, spec.channels.ankle_angle, "ankle_angle", role)
+        plate_columns, table = _plate_columns(c3d, spec.plate, kind)
+        if plate_table is None:
+            plate_table = table
+        elif kind != "grf_cop" and not _same_plate(table, plate_table):
+            raise SessionFormatError(
+                f"{path}: plate {spec.plate.number} is {table}; expected the same plate as in "
+                f"{first.path.name} ({plate_table})"
+            )
+        recording = Recording(f"{path.stem}.csv", columns | plate_columns)
+        if role == "calibration":
+            calibration.append(recording)
+        else:
+            if isinstance(spec.trials, TrialsFromEvents):
+                row = row | _event_row(c3d, spec.trials)
+            walking.append(_walking(c3d, row, recording))
+    if plate_table is None:
+        raise SessionFormatError(f"{root}: no calibration or walking trial to take the plate from")
+    plate_table.setdefault("anterior_axis", "+x")
+    info = session_info(spec.session, rate, plate_table)
+    listed = [root / spec.trials.file] if isinstance(spec.trials, TrialsFromCsv) else []
+    read = [*listed, *(path for _, path, _ in entries)]
+    provenance = import_provenance(root, "c3d", mapping, read)
+    return Session(info, tuple(calibration), tuple(walking), tuple(bench), None, provenance)
+
+
+def _same_plate(a: dict[str, object], b: dict[str, object]) -> bool:
+    return a.keys() == b.keys() and all(
+        np.isclose(a[k], b[k], atol=1e-6) if isinstance(a[k], float) else a[k] == b[k] for k in a
+    )

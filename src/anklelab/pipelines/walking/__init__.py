@@ -1,0 +1,43 @@
+"""Walking impedance: from a recorded session to ankle stiffness with uncertainty (paper 000).
+
+The steps follow paper 000 (sections 2.2, 2.3, 2.4.2, 3) and DESIGN.md section 5:
+
+1. **Platform filters** from the calibration trials (nobody on the plate): fitted on one trial,
+   scored on the others (VAF per trial, pooled over channels, and per channel).
+2. **Walking trials**: channels and motor angle zeroed over an unloaded baseline at the start of
+   each file; heel contact detected from the vertical force; the platform's own force transients
+   predicted from the motor angle and subtracted from the low-passed channels; GRF, COP and
+   ankle torque computed with the COP and the ankle angle zeroed at heel contact; derivatives
+   of the angle by a local quadratic fit; the true perturbation onset detected from the motor
+   angle. Trials that fail a check are dropped with the reason logged.
+3. **Ensembles**: for each timing point (manifest ``delay_ms``) and direction, every perturbed
+   trial is cut at its own detected onset and the mean unperturbed trial, cut at the same time
+   after heel contact, is subtracted; angle and torque offsets (read before the low-pass has
+   spread the perturbation backwards in time) are removed; bootstrap averages of random
+   subsets of the perturbed trials are formed.
+4. **Model**: ``T = I θ'' + b θ' + k θ`` fitted to each bootstrap average over the analysis
+   window and the sensitivity windows (optionally with a stiffness that changes linearly
+   within the window, ``stiffness_model = "linear"``); ``cop_m`` is the θ²-weighted nominal
+   lever arm.
+5. **Bench**: stiffness per actuator distance and the walking-vs-bench error at ``cop_m``.
+
+Everything is read from the session (sample rate, plate geometry and mounting, subject geometry,
+trial manifest); no number of the digital twin is assumed.
+"""
+
+from anklelab.pipelines.walking.analysis import STEPS, analyze_walking
+from anklelab.pipelines.walking.calibration import fit_platform_filters
+from anklelab.pipelines.walking.results import TimingPoint, WalkingResults
+from anklelab.pipelines.walking.settings import WalkingSettings, load_walking_settings
+from anklelab.pipelines.walking.stance import STANCE_CHANNELS
+
+__all__ = [
+    "STANCE_CHANNELS",
+    "STEPS",
+    "TimingPoint",
+    "WalkingResults",
+    "WalkingSettings",
+    "analyze_walking",
+    "fit_platform_filters",
+    "load_walking_settings",
+]

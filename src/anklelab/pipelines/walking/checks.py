@@ -1,0 +1,113 @@
+"""Plausibility checks of walking results: numbers that are physically implausible are flagged.
+
+Each check returns a message naming the condition, the value and what was expected; the
+analysis puts them in ``results.json`` (``warnings``), the command line prints them and the
+report shows them. Nothing is silently corrected.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from anklelab.ident.irf import PlatformFilters
+from anklelab.pipelines.walking.results import TimingPoint, sd
+
+__all__ = ["MAX_STIFFNESS_NM_PER_RAD", "filter_summary", "plausibility"]
+
+MAX_STIFFNESS_NM_PER_RAD = 20_000.0
+"""Above this an ankle stiffness is implausible (the stiffest prosthetic feet and a human ankle
+at push-off are well below 10 000 N·m/rad)."""
+FOOT_LENGTH_M = 0.30
+"""A lever arm farther than this from the heel-contact point lies beyond any foot's toes."""
+_HEEL_MARGIN_M = 0.02  # a COP may sit slightly behind the heel-contact point
+
+
+def plausibility(points: Sequence[TimingPoint], heel_to_ankle_m: float) -> list[str]:
+    """Warnings about implausible estimates of the timing points.
+
+    Parameters
+    ----------
+    points : sequence of TimingPoint
+        The analysis' timing points.
+    heel_to_ankle_m : float
+        Anterior distance from the heel-contact COP to the ankle centre, m (the lever arm of
+        the heel-contact point is minus this).
+
+    Examples
+    --------
+    >>> from anklelab.pipelines.walking.results import Estimate
+    >>> e = Estimate(40_018.0, 10.0, (39_000.0, 41_000.0))
+    >>> tp = TimingPoint(100.0, "dorsi", 50, 200, 0.06, e, e, e, e, "constant", e, False)
+    >>> plausibility([tp], 0.04)[0][:43]
+    'dorsi/100: stiffness 40018 N·m/rad is above'
+    """
+    messages = []
+    lowest, highest = -heel_to_ankle_m - _HEEL_MARGIN_M, FOOT_LENGTH_M - heel_to_ankle_m
+    for tp in points:
+        k = tp.stiffness.mean
+        if not k > 0:
+            messages.append(
+                f"{tp.key}: stiffness {k:.0f} N·m/rad is not positive: check the plate's "
+                "channel map and anterior_axis, the sign of the angles and the manifest's "
+                "directions"
+            )
+        elif k > MAX_STIFFNESS_NM_PER_RAD:
+            messages.append(
+                f"{tp.key}: stiffness {k:.0f} N·m/rad is above {MAX_STIFFNESS_NM_PER_RAD:.0f}, "
+                "implausible for an ankle: check the geometry's units (metres) and the "
+                "channels for glitches"
+            )
+        if not lowest <= tp.cop_m <= highest:
+            messages.append(
+                f"{tp.key}: the lever arm {100 * tp.cop_m:.1f} cm lies outside the foot (expected "
+                f"{100 * lowest:.0f} to {100 * highest:.0f} cm from the ankle): check "
+                "heel_to_ankle_m, the plate geometry and its channel map"
+            )
+        if tp.vaf.mean < 0:
+            messages.append(
+                f"{tp.key}: the impedance model explains none of the torque (VAF "
+                f"{tp.vaf.mean:.0f} %): the estimate is meaningless"
+            )
+    messages += _directions_disagree(points)
+    return messages
+
+
+def _directions_disagree(points: Sequence[TimingPoint]) -> list[str]:
+    """Dorsi- and plantarflexion stiffness at one timing point whose intervals do not overlap."""
+    by_key = {tp.key: tp for tp in points}
+    messages = []
+    for tp in points:
+        other = by_key.get(f"plantar/{tp.delay_ms:g}") if tp.direction == "dorsi" else None
+        if other is None:
+            continue
+        (a_low, a_high), (b_low, b_high) = tp.stiffness.ci95, other.stiffness.ci95
+        if a_high < b_low or b_high < a_low:
+            messages.append(
+                f"{tp.delay_ms:g} ms: dorsiflexion and plantarflexion stiffness disagree by more "
+                f"than their 95 % intervals ({tp.stiffness.mean:.0f} [{a_low:.0f}, {a_high:.0f}] "
+                f"vs {other.stiffness.mean:.0f} [{b_low:.0f}, {b_high:.0f}] N·m/rad): the ankle "
+                "responds differently in the two directions, or a direction is mislabelled"
+            )
+    return messages
+
+
+def filter_summary(
+    filters: PlatformFilters,
+    vaf: NDArray[np.float64],
+    vaf_by_channel: NDArray[np.float64],
+    held_out: bool,
+) -> dict[str, Any]:
+    """The ``platform_filters`` entry of ``results.json``: filter length and scores (VAF, %)."""
+    scored = vaf.size > 0
+    by_channel = vaf_by_channel.mean(axis=0) if scored else []
+    return {
+        "n_lags": int(filters.n_lags),
+        "vaf_percent_mean": float(np.mean(vaf)) if scored else None,
+        "vaf_percent_sd": sd(vaf) if scored else None,
+        "vaf_percent_by_channel": dict(zip(filters.channels, map(float, by_channel), strict=False)),
+        "held_out": held_out,
+    }

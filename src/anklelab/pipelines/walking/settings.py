@@ -1,0 +1,175 @@
+"""Settings of the walking-impedance analysis, validated when loaded (paper 000's defaults)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any, Literal
+
+import numpy as np
+from pydantic import Field, model_validator
+
+from anklelab._params import Parameters, load_parameters
+
+__all__ = ["WalkingSettings", "load_walking_settings"]
+
+_OFFSET_REFERENCE_MS, _PAPER_CUTOFF_HZ = 80.0, 20.0  # offsets read 80 ms early at 20 Hz, order 4
+
+
+class WalkingSettings(Parameters):
+    """Every setting of the walking analysis, validated (defaults from paper 000).
+
+    Attributes
+    ----------
+    cutoff_hz, filter_order
+        Zero-phase Butterworth low-pass for all signals (paper 000: 20 Hz, 4th order).
+    derivative_window
+        Samples per local quadratic fit for derivatives (paper 000: the point and 4 around it).
+    heel_contact_threshold_n, heel_contact_hold_ms
+        Vertical force that marks heel contact (paper 000: 25 N) and how long it must hold.
+    contact_cop_ms
+        The COP at heel contact (where the COP is zeroed) is read from a line fitted to the
+        unfiltered COP over this span from the contact sample, at the instant the force crosses
+        the threshold (short, so that a COP rolling fast after heel strike is followed).
+    baseline_ms
+        Unloaded span at the start of each walking file used to zero channels and motor angle.
+    onset_min_amplitude_rad
+        Smallest motor-angle excursion that counts as a perturbation.
+    onset_tolerance_ms
+        A perturbed trial whose detected onset (after the detected heel contact) differs from
+        its manifest ``delay_ms`` by more than this is dropped as mislabelled. The onset jitters
+        by 3-5 ms sd around the intended delay (paper 000); on default twin sessions (seeds
+        0-2, 1200 perturbed trials) onset minus delay_ms is -0.4 ± 4.2 ms, at most 15.9 ms
+        away. 50 ms is three times that, and less than half the 125 ms between paper 000's
+        timing points, so a trial filed under a neighbouring timing point is caught.
+    filter_inputs, n_lags, angle_lags, filter_method, calibration_fit_trial
+        Platform filters: input pathways, length of the velocity/acceleration filters and of
+        the angle filter (samples; 1 = a static gain, see
+        :class:`~anklelab.ident.irf.PlatformFilters`), estimator, calibration trial (index)
+        they are fitted on; the other calibration trials score them.
+    window_ms, sensitivity_windows_ms
+        Impedance analysis window after the onset and the alternative windows checked.
+    offset_reference_ms
+        How long before each detected onset the angle and torque offsets are read. Paper 000
+        zeroes both at the window start, but the zero-phase low-pass spreads the perturbation
+        about 1.5/cutoff_hz s backwards in time, so at the onset the filtered acceleration is at
+        its peak and the torque offset removed there contains ``I θ'' + b θ'`` that the angle
+        offset does not: on data with known K, B, I this biases stiffness by about -15 % and
+        inertia by -60 %. Reading the offsets before the spread removes the bias; 0 reproduces
+        the paper literally. Unset (``None``, the default), it follows the low-pass (see
+        :meth:`offset_reference`): 80 ms at paper 000's 20 Hz, order 4.
+    stiffness_model
+        ``"auto"`` (default): per timing point, the constant or the linearly changing stiffness
+        ``k + k₁ (t - t_c)``, whichever estimates the θ²-weighted stiffness with the smaller
+        mean squared error (see :mod:`anklelab.pipelines.walking.impedance`). ``"constant"``:
+        paper 000's model. ``"linear"``: always the changing stiffness. How each does on the
+        randomised twin and the independent generator: docs/guide/walking-analysis.md.
+    covariate_adjustment, adjustment_span_ms, adjustment_guard_ms, adjustment_bins
+        Remove each trial's own gait variation, predicted from its raw signals over the
+        ``adjustment_span_ms`` before its onset (ending ``adjustment_guard_ms`` before it, in
+        ``adjustment_bins`` bins) by a regression learned on the unperturbed trials (see
+        :mod:`anklelab.pipelines.walking.adjustment`).
+    outlier_mads
+        A perturbed or unperturbed trial departing from its group's median by more than this
+        many robust sd at any sample is dropped with a reason (a glitch would dominate the
+        average).
+    interval_reps
+        Resamples behind each 95 % interval (``ci95``).
+    change_threshold
+        The stiffness is reported as changing within the window when the interval of its
+        change over the window (a fraction of it) lies wholly beyond this.
+    bootstrap_reps, bootstrap_fraction, seed
+        Paper 000's bootstrap (its ``sd``): repetitions, fraction of the perturbed trials per
+        repetition; the seed of every random draw.
+    """
+
+    cutoff_hz: float = Field(20.0, gt=0)
+    filter_order: int = Field(4, ge=1, le=12)
+    derivative_window: int = Field(5, ge=3)
+    heel_contact_threshold_n: float = Field(25.0, gt=0)
+    heel_contact_hold_ms: float = Field(5.0, ge=0)
+    contact_cop_ms: float = Field(5.0, gt=0)
+    contact_cop_degree: int = Field(1, ge=0, le=5)
+    baseline_ms: float = Field(50.0, gt=0)
+    onset_min_amplitude_rad: float = Field(0.005, gt=0)
+    onset_tolerance_ms: float = Field(50.0, gt=0)
+    filter_inputs: tuple[Literal["angle", "velocity", "acceleration"], ...] = Field(
+        ("angle", "acceleration"), min_length=1
+    )
+    n_lags: int = Field(100, ge=1)
+    angle_lags: int = Field(1, ge=1)
+    filter_method: Literal["pinv", "toeplitz"] = "pinv"
+    calibration_fit_trial: int = Field(0, ge=0)
+    window_ms: float = Field(100.0, gt=0)
+    offset_reference_ms: float | None = Field(None, ge=0)
+    sensitivity_windows_ms: tuple[float, ...] = (75.0, 125.0)
+    stiffness_model: Literal["auto", "constant", "linear"] = "auto"
+    covariate_adjustment: bool = True
+    adjustment_span_ms: float = Field(100.0, gt=0)
+    adjustment_guard_ms: float = Field(5.0, ge=0)
+    adjustment_bins: int = Field(5, ge=1, le=50)
+    outlier_mads: float = Field(25.0, gt=3)
+    interval_reps: int = Field(400, ge=20, le=20_000)
+    change_threshold: float = Field(0.2, gt=0)
+    bootstrap_reps: int = Field(100, ge=1, le=20_000)
+    bootstrap_fraction: float = Field(0.6, gt=0, le=1)
+    seed: int = Field(0, ge=0)
+
+    @model_validator(mode="after")
+    def _consistent(self) -> WalkingSettings:
+        if self.derivative_window % 2 == 0:
+            raise ValueError(
+                f"derivative_window: expected an odd number, got {self.derivative_window}"
+            )
+        if len(set(self.filter_inputs)) != len(self.filter_inputs):
+            raise ValueError(f"filter_inputs: expected distinct names, got {self.filter_inputs}")
+        if any(w <= 0 for w in self.sensitivity_windows_ms):
+            raise ValueError(
+                f"sensitivity_windows_ms: expected > 0, got {self.sensitivity_windows_ms}"
+            )
+        return self
+
+    def windows_ms(self) -> tuple[float, ...]:
+        """The analysis window followed by the sensitivity windows, ms."""
+        return (self.window_ms, *(w for w in self.sensitivity_windows_ms if w != self.window_ms))
+
+    def offset_reference(self) -> float:
+        """How long before each onset the offsets are read, ms: ``offset_reference_ms`` if set,
+        else scaled to the low-pass.
+
+        The zero-phase low-pass spreads the perturbation backwards in time by its impulse
+        response mirrored; the envelope of a Butterworth response decays with the time
+        constant of its least damped pole pair, ``τ = 1 / (2π f_c sin(π / 2n))`` (``f_c`` the
+        cut-off, ``n`` the order). 80 ms (3.85 τ, where that envelope is down to 2 %) removes
+        the bias at paper 000's 20 Hz, order 4; other filters get the same number of time
+        constants: ``80 ms × (20 Hz / f_c) × sin(π/8) / sin(π / 2n)``. Measured on the
+        hand-made session of known impedance (tests/test_pipeline_walking.py; order 4 at 10,
+        20 and 40 Hz, orders 2 and 8 at 20 Hz), the largest stiffness error over its four
+        conditions is 0.4-0.8 % with 3.85 τ for every filter, 0.8-7.8 % with 1 τ, and the mean
+        error -12 % to -23 % with 0. A longer reference gains nothing and lets the walking
+        profile's trial-to-trial drift in: the bootstrap sd grows (at 20 Hz 4.2 N·m/rad with
+        3.85 τ, 4.7 with 5 τ), and at 40 Hz 80 ms (7.7 τ) gives -1.1 % at 150 ms, 40 ms -0.5 %.
+
+        Examples
+        --------
+        >>> WalkingSettings().offset_reference()
+        80.0
+        >>> WalkingSettings(cutoff_hz=40.0).offset_reference()
+        40.0
+        >>> round(WalkingSettings(filter_order=2).offset_reference(), 1)
+        43.3
+        """
+        if self.offset_reference_ms is not None:
+            return self.offset_reference_ms
+        slowest = np.sin(np.pi / 8) / np.sin(np.pi / (2 * self.filter_order))
+        return float(_OFFSET_REFERENCE_MS * _PAPER_CUTOFF_HZ / self.cutoff_hz * slowest)
+
+
+def load_walking_settings(path: str | Path | None = None, **overrides: Any) -> WalkingSettings:
+    """Settings from a TOML file of :class:`WalkingSettings` keys (defaults if no file).
+
+    Keyword arguments that are not ``None`` override the file; every value is validated and an
+    error names the file and the key.
+    """
+    settings = load_parameters(WalkingSettings, path) if path else WalkingSettings()
+    changes = {key: value for key, value in overrides.items() if value is not None}
+    return settings.replace(changes) if changes else settings

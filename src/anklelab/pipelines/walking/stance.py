@@ -1,0 +1,337 @@
+"""Walking trials to heel-contact-aligned stance trials, every dropped trial logged with why.
+
+Each walking file is zeroed over its unloaded start; heel contact is detected from the vertical
+force; the platform's own force transients (predicted from the motor angle by the platform
+filters) are subtracted from the low-passed sagittal load; the COP, the lever arm ``dx`` and the
+ankle torque are computed with the COP zeroed at heel contact; the ankle angle's derivatives come
+from a local quadratic fit; and the perturbation onset is detected from the motor angle.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import numpy as np
+from numpy.typing import NDArray
+
+from anklelab.data.session import Session, WalkingTrial
+from anklelab.errors import SessionFormatError
+from anklelab.forceplate import (
+    SagittalLoad,
+    ankle_torque,
+    cop_from_moment,
+    sagittal_matrix,
+)
+from anklelab.ident.irf import PlatformFilters
+from anklelab.pipelines.walking.settings import WalkingSettings
+from anklelab.signals import (
+    Trials,
+    epoch,
+    heel_contact,
+    kinematics,
+    lowpass,
+    lowpass_min_samples,
+    perturbation_onset,
+    stack_recordings,
+)
+
+__all__ = ["STANCE_CHANNELS", "drop_summary", "reason_kind", "samples", "stance_trials"]
+
+STANCE_CHANNELS = (
+    "angle",
+    "velocity",
+    "acceleration",
+    "torque",
+    "dx",
+    "grf_z",
+    "motor_angle",
+    "torque_raw",
+    "grf_z_raw",
+    "angle_raw",
+)
+"""Channels of the heel-contact-aligned stance trials (rad, rad/s, rad/s², N·m, m, N, rad; the
+``_raw`` ones unfiltered and uncorrected for the platform, N·m, N, rad)."""
+_MISMATCH = "onset differs from the manifest's delay_ms"
+
+
+def condition(trial: WalkingTrial) -> str:
+    return f"{trial.direction}/{trial.delay_ms:g}" if trial.perturbed else "none"
+
+
+def _first_reasons(
+    checks: Sequence[tuple[NDArray[np.bool_], str | Sequence[str]]], n: int
+) -> list[tuple[str, ...]]:
+    """Per trial, the first failing check's reason (later checks assume the earlier passed).
+
+    A check's reason is one text for every trial, or one per trial.
+    """
+    log: list[tuple[str, ...]] = [()] * n
+    for mask, reason in checks:
+        for i in np.flatnonzero(mask):
+            log[i] = log[i] or (reason if isinstance(reason, str) else reason[i],)
+    return log
+
+
+def reason_kind(reason: str) -> str:
+    """A drop reason without its per-trial details (the part in square brackets at its end)."""
+    return reason.split(" [", 1)[0]
+
+
+def _mismatch_reasons(
+    walking: Sequence[WalkingTrial], onset_ms: NDArray[np.float64], tolerance_ms: float
+) -> list[str]:
+    """Per trial, the drop reason for an onset that disagrees with the manifest's delay_ms."""
+    return [
+        f"{_MISMATCH} by more than {tolerance_ms:g} ms [trial {w.trial}: detected "
+        f"{t:.1f} ms after heel contact, manifest delay_ms {w.delay_ms:g}]"
+        for w, t in zip(walking, onset_ms, strict=True)
+    ]
+
+
+def _mislabelled_conditions(
+    walking: Sequence[WalkingTrial],
+    log: Sequence[tuple[str, ...]],
+    onset_ms: NDArray[np.float64],
+    tolerance_ms: float,
+) -> list[str]:
+    """A message for each manifest condition that lost every trial, some to the onset check.
+
+    Says how many trials the check dropped, where their onsets were (median), and which of the
+    manifest's timing points of the same direction that median is nearest to.
+    """
+    conditions = np.array([condition(w) for w in walking])
+    delay = np.array([w.delay_ms for w in walking], dtype=float)
+    mismatch = np.array([bool(r) and reason_kind(r[0]).startswith(_MISMATCH) for r in log])
+    kept = np.array([not r for r in log])
+    messages = []
+    for key in dict.fromkeys(conditions[mismatch]):
+        members = conditions == key
+        if kept[members].any():
+            continue
+        direction, labelled = key.split("/")[0], delay[members][0]
+        timing = np.unique(delay[np.char.startswith(conditions, f"{direction}/")])
+        timing = timing[timing != labelled]
+        median = float(np.median(onset_ms[members & mismatch]))
+        nearest = timing[np.argmin(np.abs(timing - median))] if timing.size else np.inf
+        hint = (
+            f"they fit {direction}/{nearest:g}: are the delay_ms labels swapped?"
+            if abs(nearest - median) <= tolerance_ms
+            else "are the delay_ms labels wrong?"
+        )
+        messages.append(
+            f"walking/trials.csv: {key}: all {members.sum()} perturbed trials were dropped, "
+            f"{(members & mismatch).sum()} of them because the onset detected in the motor angle "
+            f"(median {median:.0f} ms after heel contact) differs from the manifest's "
+            f"delay_ms = {labelled:g} by more than onset_tolerance_ms = "
+            f"{tolerance_ms:g} ms; {hint}"
+        )
+    return messages
+
+
+def stance_trials(
+    session: Session, settings: WalkingSettings, filters: PlatformFilters
+) -> tuple[Trials, list[str]]:
+    """Walking trials to heel-contact-aligned stance trials, every drop logged with its reason.
+
+    Also returns a message for each manifest condition whose trials were all dropped, some
+    because their detected onsets disagree with the manifest's ``delay_ms``.
+    """
+    info, walking = session.info, session.walking
+    fs = info.sample_rate_hz
+    if not walking:
+        raise SessionFormatError("walking/trials.csv: the session has no walking trials")
+    plate = info.force_plate
+    raw, lengths = stack_recordings(
+        [w.recording for w in walking], ("motor_angle", "ankle_angle", *plate.channels)
+    )
+    n_base = max(1, round(settings.baseline_ms * fs / 1000.0))
+    n_filter = lowpass_min_samples(fs, settings.cutoff_hz, order=settings.filter_order)
+    base, thr = f"{settings.baseline_ms:g} ms", f"{settings.heel_contact_threshold_n:g} N"
+    too_short = [
+        (lengths <= n_base, f"recording shorter than the {base} baseline"),
+        (lengths < n_filter, f"recording shorter than the {n_filter} samples the low-pass needs"),
+    ]
+    if all(_first_reasons(too_short, len(walking))):
+        raise SessionFormatError(
+            "walking/trials.csv: no walking trial is long enough to analyse: "
+            + drop_summary(_first_reasons(too_short, len(walking)), walking)
+        )
+    # the plate's signals that are linear in the load (its channels, or for GRF/COP data the
+    # sagittal signals); they, the motor and the ankle angle are zeroed over the baseline (the
+    # ankle angle is re-zeroed later)
+    signals = np.concatenate([raw[:, :2], plate.load_signals(raw[:, 2:])], axis=1)
+    signals -= signals[..., :n_base].mean(axis=-1, keepdims=True)
+    motor, ankle_raw = signals[:, 0], signals[:, 1]
+    sagittal = sagittal_matrix(plate)
+    load_raw = np.einsum("sc,nct->nst", sagittal, signals[:, 2:])  # grf_x, grf_z, grf_z * cop_x
+    contact = heel_contact(
+        load_raw[:, 1],
+        fs,
+        settings.heel_contact_threshold_n,
+        hold_ms=settings.heel_contact_hold_ms,
+    )
+    event = np.maximum(contact, n_base)
+    rows = np.arange(len(walking))
+
+    lp = {"fs": fs, "cutoff_hz": settings.cutoff_hz, "order": settings.filter_order}
+    grf_x, grf_z, moment = np.moveaxis(
+        lowpass(load_raw, **lp) - filters.predict(motor, combine=sagittal), 1, 0
+    )
+    cop_x = cop_from_moment(moment, grf_z)
+    cop0 = _cop_at_contact(
+        load_raw[:, 1],
+        load_raw[:, 2],
+        event,
+        settings.heel_contact_threshold_n,
+        fs,
+        settings.contact_cop_ms,
+        settings.contact_cop_degree,
+    )
+    cop_defined = np.isfinite(cop0)
+    cop_x[rows, event] = np.where(cop_defined, cop0, 0.0)  # ankle_torque zeroes the COP here
+    torque, dx = ankle_torque(
+        SagittalLoad(grf_x, grf_z, cop_x),
+        event,
+        heel_to_ankle_m=info.heel_to_ankle_m,
+        ankle_height_m=info.ankle_height_m,
+    )
+    ankle = lowpass(ankle_raw, **lp)
+    kin = kinematics(ankle - ankle[rows, event][:, None], fs, settings.derivative_window)
+
+    onsets = perturbation_onset(
+        motor, start=event, min_amplitude_rad=settings.onset_min_amplitude_rad
+    )
+    found = np.isfinite(onsets.index)
+    perturbed = np.array([w.perturbed for w in walking])
+    delay = np.array([w.delay_ms for w in walking], dtype=float)
+    sign = np.array([{"dorsi": 1.0, "plantar": -1.0}.get(w.direction, 0.0) for w in walking])
+    onset = np.where(found, onsets.index, event)
+    offset = np.round(onset).astype(np.int64) - event
+    onset_ms = (onset - event) / fs * 1000.0
+    tolerance = settings.onset_tolerance_ms
+    log = _first_reasons(
+        [
+            *too_short,
+            (contact < 0, f"no heel contact: vertical force never held {thr}"),
+            (contact <= n_base, f"heel contact within the first {base} (no unloaded baseline)"),
+            (~cop_defined, "centre of pressure undefined at heel contact"),
+            (perturbed & np.isnan(delay), "perturbed trial without delay_ms"),
+            (perturbed & (sign == 0), "perturbed trial without a direction (dorsi or plantar)"),
+            (perturbed & ~found, "no perturbation found in the motor angle"),
+            (
+                perturbed & (np.sign(onsets.amplitude) != sign),
+                "motor moved against the manifest direction",
+            ),
+            (perturbed & (onset < event), "perturbation began before heel contact"),
+            (
+                perturbed & (np.abs(onset_ms - delay) > tolerance),
+                _mismatch_reasons(walking, onset_ms, tolerance),
+            ),
+            (~perturbed & found, "motor angle moved in an unperturbed trial"),
+        ],
+        len(walking),
+    )
+    mislabelled = _mislabelled_conditions(walking, log, onset_ms, tolerance)
+    usable = perturbed & np.array([not r for r in log])
+    span = int(np.max(offset[usable], initial=0)) + samples(max(settings.windows_ms()), fs)
+    grf_x_raw, grf_z_raw, moment_raw = np.moveaxis(load_raw, 1, 0)
+    lever = np.where(cop_defined, cop0, 0.0)[:, None] + info.heel_to_ankle_m
+    channels_by_name = {
+        "angle": kin[:, 0],
+        "velocity": kin[:, 1],
+        "acceleration": kin[:, 2],
+        "torque": torque,
+        "dx": dx,
+        "grf_z": grf_z,
+        "motor_angle": motor,
+        "torque_raw": moment_raw - lever * grf_z_raw + grf_x_raw * info.ankle_height_m,
+        "grf_z_raw": grf_z_raw,
+        "angle_raw": ankle_raw - ankle[rows, event][:, None],
+    }
+    data = np.stack([channels_by_name[name] for name in STANCE_CHANNELS], axis=1)
+    time0 = np.array([w.recording.time_s[0] for w in walking])
+    metadata = {
+        "condition": np.array([condition(w) for w in walking]),
+        "trial": np.array([w.trial for w in walking]),
+        "delay_ms": delay,
+        "heel_contact_s": time0 + event / fs,
+        "onset_s": np.where(perturbed & found, time0 + onset / fs, np.nan),
+        "onset_ms": np.where(perturbed & found, onset_ms, np.nan),
+        "offset": offset,
+    }
+    stance = epoch(
+        data,
+        fs,
+        event,
+        0.0,
+        (span - 1) / fs,
+        ch_names=STANCE_CHANNELS,
+        metadata=metadata,
+        lengths=lengths,
+        drop_log=log,
+    )
+    stance = stance.drop(
+        ~np.isfinite(stance.data).all(axis=(1, 2)),
+        "vertical force below 1 N within the analysed stance (COP undefined)",
+    )
+    return stance, mislabelled
+
+
+def _cop_at_contact(
+    grf_z: NDArray[np.float64],
+    moment: NDArray[np.float64],
+    event: NDArray[np.int64],
+    threshold_n: float,
+    fs: float,
+    span_ms: float,
+    degree: int,
+) -> NDArray[np.float64]:
+    """COP at heel contact: the raw COP's local polynomial at the instant the force crosses.
+
+    The crossing is found to a fraction of a sample (linear interpolation of the vertical force
+    between the last sample below ``threshold_n`` and the first above). A polynomial of
+    ``degree`` in time is fitted to the raw COP (``moment / grf_z``) over the first ``span_ms``
+    from the crossing sample, weighted by ``grf_z**2``, and evaluated at the crossing. The
+    weight follows the COP's error, which falls as 1/Fz: channel noise, and the plate's own
+    inertial and ringing loads when the foot's strike moves the compliant hinge, weigh most
+    where the load is small. The low-pass is not used: it would smear the force's rise over the
+    following samples. With the weight every term is a product of raw signals (no division).
+    """
+    n = max(degree + 1, round(span_ms * fs / 1000.0))
+    last = grf_z.shape[-1] - 1
+    index = np.minimum(event[:, None] + np.arange(n), last)
+    before = np.take_along_axis(grf_z, np.maximum(event - 1, 0)[:, None], axis=-1)[:, 0]
+    at = np.take_along_axis(grf_z, index[:, :1], axis=-1)[:, 0]
+    with np.errstate(invalid="ignore", divide="ignore"):
+        crossing = np.clip((threshold_n - at) / (at - before), -1.0, 0.0)  # samples from event
+    fz = np.take_along_axis(grf_z, index, axis=-1)
+    t = (np.arange(n) - np.nan_to_num(crossing)[:, None]) / n  # 0 at the crossing
+    powers = t[..., None] ** np.arange(degree + 1)  # (n_trials, n, degree + 1)
+    weighted = powers * fz[..., None]
+    gram = np.einsum("tnp,tnq->tpq", weighted, weighted)
+    rhs = np.einsum("tnp,tn->tp", weighted, np.take_along_axis(moment, index, axis=-1))
+    with np.errstate(invalid="ignore", divide="ignore"):
+        singular = np.abs(np.linalg.det(gram)) < np.finfo(float).tiny
+        gram[singular] = np.eye(degree + 1)
+        coef = np.linalg.solve(gram, rhs[..., None])[..., 0]
+    return np.where(singular, np.nan, coef[:, 0])
+
+
+def samples(ms: float, fs: float) -> int:
+    """Samples in ``ms`` milliseconds at ``fs`` Hz (at least 3)."""
+    return max(3, round(ms * fs / 1000.0))
+
+
+def drop_summary(
+    drop_log: Sequence[tuple[str, ...]], walking: Sequence[WalkingTrial], shown: int = 3
+) -> str:
+    """Each kind of drop reason with its count and the first ``shown`` files it applies to."""
+    files: dict[str, list[str]] = {}
+    for reasons, trial in zip(drop_log, walking, strict=True):
+        for reason in reasons:
+            files.setdefault(reason_kind(reason), []).append(trial.recording.name)
+    parts = []
+    for reason, names in files.items():
+        more = ", ..." if len(names) > shown else ""
+        parts.append(f"{reason} ({len(names)}: {', '.join(names[:shown])}{more})")
+    return "; ".join(parts) or "none"

@@ -1,0 +1,257 @@
+"""``anklelab import c3d DIR --map MAP``: a twin session exported to per-trial C3D files (with
+ezc3d, here) imports back through the shipped mapping and analyses like the native session."""
+
+from __future__ import annotations
+
+import csv
+import math
+import re
+import subprocess
+import sys
+import warnings
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from anklelab.data import load_session
+from anklelab.data.c3d_import import import_c3d
+from anklelab.errors import ParameterError, SessionFormatError
+from anklelab.forceplate import CHANNELS
+from anklelab.pipelines import WalkingSettings, analyze_walking
+from tests.c3d_files import write_c3d
+from tests.lab_twin import small_twin
+
+MAP = Path(__file__).parents[1] / "examples" / "maps" / "c3d_kistler.toml"
+SETTINGS = WalkingSettings(bootstrap_reps=20)
+DEG = 180.0 / math.pi
+LABEL = {"dorsi": "d", "plantar": "p", "none": "u"}
+
+
+def export_trial(path, recording, geometry, *, events=(), walking_axis="+y"):
+    """One recording as a C3D file: the plate as FORCE_PLATFORM 1 (type 3, mm) with its +x
+    along the lab's ``walking_axis`` (z up), the motor angle and the goniometer (plantarflexion
+    positive) in degrees."""
+    assert geometry.anterior_axis == "+x"
+    forward = {"+y": np.array([0.0, 1.0, 0.0]), "-x": np.array([-1.0, 0.0, 0.0])}[walking_axis]
+    down = np.array([0.0, 0.0, -1.0])
+    right = np.cross(down, forward)  # plate y (z down): to the walker's right
+    centre = np.array([0.6, 1.2, 0.0])
+    corners = [
+        centre + sx * 0.2 * forward + sy * 0.3 * right
+        for sx, sy in ((1, 1), (-1, 1), (-1, -1), (1, -1))
+    ]
+    labels = [f"F{c}" for c in CHANNELS]
+    analogs = dict(zip(labels, recording.stack(CHANNELS), strict=True))
+    analogs["Motor"] = recording["motor_angle"] * DEG
+    if "ankle_angle" in recording.columns:
+        analogs["Gonio"] = -recording["ankle_angle"] * DEG
+    plate = {
+        "type": 3,
+        "labels": labels,
+        "origin": np.array([geometry.a_m, geometry.b_m, geometry.az0_m]) * 1000.0,
+        "corners": np.array(corners) * 1000.0,
+    }
+    return write_c3d(
+        path,
+        analogs,
+        units=dict.fromkeys(labels, "N"),
+        plates=[plate],
+        per_frame=1,
+        events=events,
+    )
+
+
+def export_session(session, root, *, events=False):
+    """Calibration and walking trials as C3D files, with trials.csv (text labels)."""
+    root.mkdir()
+    geometry = session.info.force_plate
+    rows = [["file", "role", "label", "perturbed", "direction", "delay_ms"]]
+    for i, rec in enumerate(session.calibration, start=1):
+        export_trial(root / f"cal_{i:02d}.c3d", rec, geometry)
+        rows.append([f"cal_{i:02d}.c3d", "calibration", "", "", "", ""])
+    for w in session.walking:
+        name = f"walk_{int(w.trial):03d}.c3d"
+        marks = ()
+        if events:
+            fz = w.recording.stack(CHANNELS)[4:].sum(axis=0)
+            strike = w.recording.time_s[np.argmax(fz > 25.0)]
+            marks = [("Foot Strike", "Right", strike)]
+            if w.perturbed:
+                onset = strike + (w.delay_ms + 3.0) / 1000.0  # an onset a little late
+                marks.append(("Dorsi" if w.direction == "dorsi" else "Plantar", "General", onset))
+        export_trial(root / name, w.recording, geometry, events=marks)
+        delay = "" if not w.perturbed else f"{w.delay_ms:g}"
+        label = f"S03_{LABEL[w.direction]}{delay}_{w.trial}"
+        rows.append([name, "walking", label, str(int(w.perturbed)), w.direction, delay])
+    with open(root / "trials.csv", "w", newline="") as f:
+        csv.writer(f).writerows(rows)
+    return root
+
+
+@pytest.fixture(scope="module")
+def twin(tmp_path_factory):
+    session = small_twin()
+    root = export_session(session, tmp_path_factory.mktemp("c3d") / "trials")
+    return session, root, analyze_walking(session, SETTINGS)
+
+
+def test_c3d_round_trip_gives_the_native_stiffness(twin):
+    session, root, native = twin
+    imported = import_c3d(root, MAP)
+    plate = imported.info.force_plate
+    assert plate.type == "kistler8" and plate.anterior_axis == "+x"
+    assert (plate.a_m, plate.b_m, plate.az0_m) == pytest.approx(
+        (session.info.force_plate.a_m, session.info.force_plate.b_m, session.info.force_plate.az0_m)
+    )
+    assert imported.walking[0].trial.startswith("S03_")
+    results = analyze_walking(imported, SETTINGS)
+    assert [tp.key for tp in results.timing_points] == [tp.key for tp in native.timing_points]
+    for a, b in zip(results.timing_points, native.timing_points, strict=True):
+        # float32 storage is the only loss
+        assert a.stiffness.mean == pytest.approx(b.stiffness.mean, rel=1e-3)
+    assert imported.provenance["import"]["importer"] == "c3d"
+
+
+@pytest.mark.parametrize("kind", ["six_axis", "grf_cop"])
+def test_c3d_plate_stored_as_six_axis_or_grf_cop(twin, tmp_path, kind):
+    _session, root, native = twin
+    text = MAP.read_text().replace('type = "kistler8"', f'type = "{kind}"')
+    (tmp_path / "map.toml").write_text(text)
+    imported = import_c3d(root, tmp_path / "map.toml")
+    assert imported.info.force_plate.type == kind
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        results = analyze_walking(imported, SETTINGS)
+    assert bool(caught) == (kind == "grf_cop")
+    # six_axis: lossless; grf_cop: the calibration COP is empty below 10 N (the mapping's
+    # min_force_n), so the platform's moment is not removed and the analysis says so
+    tolerance = 1e-3 if kind == "six_axis" else 0.15
+    for a, b in zip(results.timing_points, native.timing_points, strict=True):
+        assert a.stiffness.mean == pytest.approx(b.stiffness.mean, rel=tolerance)
+    assert bool(results.warnings) == (kind == "grf_cop")
+
+
+def test_trial_roles_from_events(twin, tmp_path):
+    session, _, _ = twin
+    small = type(session)(session.info, session.calibration, session.walking[:12], (), None, {})
+    root = export_session(small, tmp_path / "ev", events=True)
+    (root / "trials.csv").unlink()
+    text = MAP.read_text().replace(
+        '[trials]\nsource = "csv"\nfile = "trials.csv"',
+        '[trials]\nsource = "events"\ncalibration = ["cal_*.c3d"]\nheel_strike = "Foot Strike"\n'
+        'dorsi = "Dorsi"\nplantar = "Plantar"\ntiming_points_ms = [100, 225, 350, 475]',
+    )
+    (tmp_path / "map.toml").write_text(text)
+    imported = import_c3d(root, tmp_path / "map.toml")
+    assert len(imported.calibration) == 2
+    got = [(w.trial, w.perturbed, w.direction, w.delay_ms) for w in imported.walking]
+    want = [
+        (f"walk_{int(w.trial):03d}", w.perturbed, w.direction, w.delay_ms) for w in small.walking
+    ]
+    assert [g[:3] for g in got] == [w[:3] for w in want]
+    np.testing.assert_array_equal([g[3] for g in got], [w[3] for w in want])
+
+
+def _edit(tmp_path, root, old, new, target="map"):
+    if target == "map":
+        (tmp_path / "map.toml").write_text(MAP.read_text().replace(old, new))
+        return root, tmp_path / "map.toml"
+    copy = tmp_path / "copy"
+    copy.mkdir()
+    for p in root.iterdir():
+        (copy / p.name).symlink_to(p) if p.name != "trials.csv" else None
+    (copy / "trials.csv").write_text((root / "trials.csv").read_text().replace(old, new))
+    return copy, MAP
+
+
+@pytest.mark.parametrize(
+    ("old", "new", "target", "error", "message"),
+    [
+        (
+            'label = "Motor"',
+            'label = "motor"',
+            "map",
+            SessionFormatError,
+            r"cal_01\.c3d: no analog channel 'motor' \('Motor' differs .* only in case",
+        ),
+        (
+            'units = "deg"           # the file',
+            'units = "grad"  # the file',
+            "map",
+            ParameterError,
+            r"map\.toml: channels\.motor_angle\.units: expected one of rad, deg",
+        ),
+        (
+            'walking_axis = "+y"',
+            'walking_axis = "+z"',
+            "map",
+            SessionFormatError,
+            r"cal_01\.c3d: plate 1 \(type 3\): no plate axis is within 10° of the walking axis \+z",
+        ),
+        (
+            "number = 1 ",
+            "number = 2 ",
+            "map",
+            SessionFormatError,
+            r"cal_01\.c3d: no force platform 2; FORCE_PLATFORM:USED = 1",
+        ),
+        ('source = "csv"', 'source = "files"', "map", ParameterError, r"map\.toml: .*trials"),
+        (
+            "walk_002.c3d,walking",
+            "walk_999.c3d,walking",
+            "csv",
+            SessionFormatError,
+            r"trials\.csv: line 5, column 'file': 'walk_999\.c3d' is not a file",
+        ),
+        (
+            ",1,dorsi,",
+            ",1,sideways,",
+            "csv",
+            SessionFormatError,
+            r"trials\.csv: line \d+, column 'direction': got 'sideways'",
+        ),
+        (
+            "calibration,",
+            "calib,",
+            "csv",
+            SessionFormatError,
+            r"trials\.csv: line 2, column 'role': got 'calib'; expected one of calibration",
+        ),
+    ],
+)
+def test_malformed_mapping_or_trial_list_is_named(twin, tmp_path, old, new, target, error, message):
+    _, root, _ = twin
+    directory, mapping = _edit(tmp_path, root, old, new, target)
+    with pytest.raises(error, match=message):
+        import_c3d(directory, mapping)
+
+
+def test_import_c3d_command_and_default_import(twin, tmp_path):
+    from typer.testing import CliRunner
+
+    from anklelab.cli import app
+
+    _, root, _ = twin
+    out = tmp_path / "s.h5"
+    result = CliRunner().invoke(
+        app, ["import", "c3d", str(root), "--map", str(MAP), "--out", str(out)]
+    )
+    assert result.exit_code == 0, result.output
+    assert "(kistler8 plate)" in result.output
+
+    def run(*args):
+        code = "from anklelab.cli import run; run()"
+        return subprocess.run(
+            [sys.executable, "-c", code, *map(str, args)], capture_output=True, text=True
+        )
+
+    proc = run("import", "c3d", root, "--map", MAP, "--out", out)
+    assert proc.returncode == 2 and re.search(r"s\.h5: already exists; pass --force", proc.stderr)
+    proc = run("import", "c3d", root, "--map", MAP, "--out", root / "inside.h5")
+    assert proc.returncode == 2 and "would land inside the input" in proc.stderr
+    assert not (root / "inside.h5").exists()
+    # the plain `anklelab import SOURCE` still takes a session
+    result = CliRunner().invoke(app, ["import", str(out), "--out", str(tmp_path / "again.h5")])
+    assert result.exit_code == 0, result.output
+    assert len(load_session(tmp_path / "again.h5").walking) == len(load_session(out).walking)

@@ -1,0 +1,262 @@
+"""``anklelab import matlab FILE --map MAP``: a per-subject, dorsiflexion/plantarflexion,
+processed GRF/COP MATLAB layout (written here from a twin session) read with the shipped map,
+wildcards, units, sign flips, and malformed maps and files."""
+
+from __future__ import annotations
+
+import math
+import re
+import shutil
+from pathlib import Path
+
+import numpy as np
+import pytest
+import scipy.io
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+from anklelab.data.matlab_map import import_matlab
+from anklelab.errors import AnklelabError, ParameterError, SessionFormatError
+from anklelab.forceplate import CHANNELS
+from anklelab.pipelines import WalkingSettings, analyze_walking
+from tests.lab_twin import small_twin
+
+MAP = Path(__file__).parents[1] / "examples" / "maps" / "matlab_grf_cop.toml"
+SETTINGS = WalkingSettings(bootstrap_reps=20)
+DEG = 180.0 / math.pi
+
+
+def struct_array(elements):
+    array = np.empty((1, len(elements)), dtype=[(name, object) for name in elements[0]])
+    for i, element in enumerate(elements):
+        array[0, i] = tuple(element.values())
+    return array
+
+
+def processed(recording, geometry):
+    """The lab's processed signals: lab x backwards, z up (so y points right), COP in mm
+    (origin 2 m behind the plate), angles in degrees, the goniometer plantarflexion-positive."""
+    lab = geometry.lab_load(recording.stack(CHANNELS), min_fz_n=0.0)
+    out = {
+        "angle": recording["motor_angle"] * DEG,
+        "Fx": -lab.grf_x,
+        "Fy": -lab.grf_y,
+        "Fz": lab.grf_z,
+        "CoPx": (2.0 - lab.cop_x) * 1000.0,
+        "CoPy": -lab.cop_y * 1000.0,
+    }
+    if "ankle_angle" in recording.columns:
+        out["ankle"] = -recording["ankle_angle"] * DEG
+    return out
+
+
+def matrices(trials, geometry):
+    """Signal matrices, one trial per column, NaN after each trial's end."""
+    signals = [processed(t.recording, geometry) for t in trials]
+    n = max(s["Fz"].size for s in signals)
+    out = {}
+    for name in signals[0]:
+        block = np.full((n, len(signals)), np.nan)
+        for k, s in enumerate(signals):
+            block[: s[name].size, k] = s[name]
+        out[name] = block
+    return out
+
+
+def write_layout(path, session, subject="S07"):
+    geometry = session.info.force_plate
+    calibration = []
+    for rec in session.calibration:
+        p = processed(rec, geometry)
+        calibration.append(
+            {
+                "angle": p["angle"][:, None],
+                "GRF": np.column_stack([p["Fx"], p["Fy"], p["Fz"]]),
+                "COP": np.column_stack([p["CoPx"], p["CoPy"]]),
+            }
+        )
+    root = {"fs": session.info.sample_rate_hz, "calibration": struct_array(calibration)}
+    names = {"dorsi": "dorsiflexion", "plantar": "plantarflexion"}
+    for direction, name in names.items():
+        root[name] = {}
+        for delay in sorted({w.delay_ms for w in session.walking if w.direction == direction}):
+            group = [w for w in session.walking if w.direction == direction and w.delay_ms == delay]
+            root[name][f"t{delay:g}"] = matrices(group, geometry)
+    root["control"] = matrices([w for w in session.walking if not w.perturbed], geometry)
+    scipy.io.savemat(path, {subject: root})
+    return path
+
+
+@pytest.fixture(scope="module")
+def twin(tmp_path_factory):
+    session = small_twin()
+    path = write_layout(tmp_path_factory.mktemp("mat") / "S07.mat", session)
+    return session, path
+
+
+def test_shipped_map_reads_the_layout_and_gives_the_native_stiffness(twin):
+    session, path = twin
+    imported = import_matlab(path, MAP)
+    assert imported.info.subject == "S07" and imported.info.force_plate.type == "grf_cop"
+    assert len(imported.calibration) == 2 and len(imported.walking) == len(session.walking)
+    labels = {w.trial for w in imported.walking}
+    assert "S07.dorsiflexion.t225(1)" in labels and "S07.control(10)" in labels
+    # NaN padding removed: every trial has its own length back
+    native_lengths = sorted(w.recording.n_samples for w in session.walking)
+    assert sorted(w.recording.n_samples for w in imported.walking) == native_lengths
+    trial = next(w for w in imported.walking if w.trial == "S07.dorsiflexion.t100(2)")
+    source = [w for w in session.walking if w.direction == "dorsi" and w.delay_ms == 100][1]
+    np.testing.assert_allclose(trial.recording["ankle_angle"], source.recording["ankle_angle"])
+    np.testing.assert_allclose(trial.recording["motor_angle"], source.recording["motor_angle"])
+    native = analyze_walking(session, SETTINGS)
+    results = analyze_walking(imported, SETTINGS)
+    assert [tp.key for tp in results.timing_points] == [tp.key for tp in native.timing_points]
+    for a, b in zip(results.timing_points, native.timing_points, strict=True):
+        # the same loss as grf_cop (tests/test_plate_types.py): measured 0.10 % at most
+        assert a.stiffness.mean == pytest.approx(b.stiffness.mean, rel=2e-3)
+    assert imported.provenance["import"]["importer"] == "matlab-map"
+
+
+def test_import_matlab_command_writes_the_session(twin, tmp_path):
+    from typer.testing import CliRunner
+
+    from anklelab.cli import app
+    from anklelab.data import load_session
+
+    _, path = twin
+    out = tmp_path / "s.h5"
+    result = CliRunner().invoke(
+        app, ["import", "matlab", str(path), "--map", str(MAP), "--out", str(out)]
+    )
+    assert result.exit_code == 0, result.output
+    assert "(grf_cop plate)" in result.output
+    assert len(load_session(out).walking) == len(twin[0].walking)
+
+
+def _map(tmp_path, old, new):
+    text = MAP.read_text()
+    assert old in text, old
+    path = tmp_path / "map.toml"
+    path.write_text(text.replace(old, new))
+    return path
+
+
+@pytest.mark.parametrize(
+    ("old", "new", "error", "message"),
+    [
+        (
+            'type = "grf_cop"',
+            'type = "amti"',
+            ParameterError,
+            r"map\.toml: plate\.type: expected one of kistler8",
+        ),
+        (
+            '{ field = "Fz" }',
+            '{ field = "Fz", units = "mm" }',
+            ParameterError,
+            r"grf_z_n\.units: expected one of N, kN for a force, got 'mm'",
+        ),
+        (
+            '{ field = "Fz" }',
+            '{ field = "F_z" }',
+            SessionFormatError,
+            r"S07\.dorsiflexion\.t100\(1\)\.F_z: field is missing \(did you mean 'Fz'\?\)",
+        ),
+        (
+            'layout = "matrices"\nperturbed = true',
+            'layout = "matrices"\nperturbed = true\nlag = 1',
+            ParameterError,
+            r"walking\.0\.lag: unknown key",
+        ),
+        (
+            '"{subject}.control"',
+            '"{subject}.controls"',
+            SessionFormatError,
+            r"nothing matches the struct path '\{subject\}\.controls'",
+        ),
+        ("t{delay_ms}", "t{delay}", ParameterError, r"unknown wildcard \{delay\}"),
+        (
+            "column = 3 }",
+            "column = 4 }",
+            SessionFormatError,
+            r"calibration\(1\)\.GRF: column 4 requested of an array of shape \(20000, 3\)",
+        ),
+        (
+            'format = "anklelab-matlab-map/1"',
+            'format = "x"',
+            ParameterError,
+            r"format: expected 'anklelab-matlab-map/1'",
+        ),
+        (
+            'sample_rate_path = "{subject}.fs"',
+            'sample_rate_path = "{subject}.calibration"',
+            SessionFormatError,
+            r"S07\.calibration: expected one number",
+        ),
+    ],
+)
+def test_malformed_maps_and_files_name_the_key_or_path(twin, tmp_path, old, new, error, message):
+    _, path = twin
+    with pytest.raises(error, match=message):
+        import_matlab(path, _map(tmp_path, old, new))
+
+
+def test_subjects_are_chosen_by_wildcard(twin, tmp_path):
+    session, _ = twin
+    small = type(session)(session.info, session.calibration[:1], session.walking[:12], (), None, {})
+    path = tmp_path / "two.mat"
+    write_layout(path, small, subject="S07")
+    both = scipy.io.loadmat(path, simplify_cells=False)
+    scipy.io.savemat(path, {"S07": both["S07"], "S08": both["S07"]})
+    with pytest.raises(SessionFormatError, match=r"matches the subjects S07, S08; choose one"):
+        import_matlab(path, MAP)
+    assert import_matlab(path, MAP, subject="S08").info.subject == "S08"
+    with pytest.raises(SessionFormatError, match=r"subject 'S09' not found"):
+        import_matlab(path, MAP, subject="S09")
+
+
+@settings(
+    max_examples=60, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture]
+)
+@given(
+    lines=st.lists(st.integers(0, 60), min_size=1, max_size=3),
+    junk=st.text(st.characters(codec="utf-8", exclude_categories=["Cs"]), max_size=12),
+)
+def test_fuzzed_maps_fail_with_one_message(tmp_path, lines, junk):
+    """Any edit of the map either imports or fails with one AnklelabError (never another)."""
+    text = MAP.read_text().split("\n")
+    for k in lines:
+        if k < len(text):
+            cut = len(text[k]) // 2
+            text[k] = text[k][:cut] + junk + text[k][cut:]
+    path = tmp_path / "fuzz.toml"
+    path.write_text("\n".join(text), encoding="utf-8")
+    mat = tmp_path / "tiny.mat"
+    if not mat.exists():
+        shutil.copy(_tiny(tmp_path), mat)
+    try:
+        import_matlab(mat, path)
+    except AnklelabError as exc:
+        assert str(exc) and re.match(r"^\S", str(exc))
+
+
+def _tiny(tmp_path):
+    """A small file of the shipped layout (one calibration and few walking trials)."""
+    rng = np.random.default_rng(0)
+    n = 300
+    walking = {k: rng.normal(size=(n, 2)) for k in ("angle", "ankle", "Fx", "Fy", "CoPx", "CoPy")}
+    walking["Fz"] = 600 + rng.normal(size=(n, 2))
+    cal = {
+        "angle": rng.normal(size=(n, 1)),
+        "GRF": rng.normal(size=(n, 3)),
+        "COP": rng.normal(size=(n, 2)),
+    }
+    root = {
+        "fs": 1000.0,
+        "calibration": struct_array([cal]),
+        "dorsiflexion": {"t225": walking},
+        "control": walking,
+    }
+    path = tmp_path / "tiny_source.mat"
+    scipy.io.savemat(path, {"S01": root})
+    return path
