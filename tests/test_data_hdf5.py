@@ -446,3 +446,17 @@ def test_writer_refuses_text_the_store_cannot_hold(tmp_path, session, change, pa
     with pytest.raises(SessionFormatError, match=pattern):
         save_session(replace(session, **change(session)), tmp_path / "s.h5")
     assert list(tmp_path.iterdir()) == []
+
+
+def test_an_interruption_inside_h5py_is_not_reported_as_damage():
+    """h5py turns Ctrl-C during a read into a SystemError caused by the KeyboardInterrupt."""
+    from anklelab.data._h5safe import damaged
+
+    try:
+        try:
+            raise KeyboardInterrupt
+        except KeyboardInterrupt as interrupt:
+            raise SystemError("returned a result with an exception set") from interrupt
+    except SystemError as exc:
+        assert isinstance(damaged("s.h5", exc), KeyboardInterrupt)
+        assert isinstance(damaged("s.h5", SystemError("bad")), SessionFormatError)

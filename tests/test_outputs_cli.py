@@ -9,6 +9,7 @@ import signal
 import subprocess
 import sys
 import time
+from pathlib import Path
 
 import pytest
 
@@ -197,13 +198,16 @@ def test_read_only_or_full_file_system_fails_before_work(
 def test_a_failing_disk_while_writing_leaves_nothing(
     user_session, tmp_path, monkeypatch, capsys, number, hint
 ):
-    import anklelab.data.hdf5 as hdf5
+    from anklelab._atomic import is_temporary
 
-    def refuse(group, recording, attrs):
-        path = group.file.filename  # the temporary the writer is filling
-        raise OSError(number, os.strerror(number), path)
+    real = Path.write_bytes
 
-    monkeypatch.setattr(hdf5, "_write_recording", refuse)
+    def refuse(path, data):  # the writer filling its temporary
+        if is_temporary(path.name):
+            raise OSError(number, os.strerror(number), str(path))
+        return real(path, data)
+
+    monkeypatch.setattr(Path, "write_bytes", refuse)
     out = tmp_path / "new" / "s.h5"
     code, _, err = anklelab(monkeypatch, capsys, "import", user_session, "--out", out)
     assert code == 2 and one_error(err) == f"error: {out}: {hint}"

@@ -34,8 +34,17 @@ H5_ERRORS = (OSError, KeyError, RuntimeError, ValueError, TypeError, SystemError
 """What h5py raises for a damaged file (HDF5's errors surface as any of these)."""
 
 
-def damaged(path: object, exc: BaseException) -> SessionFormatError:
-    """The error for a file HDF5 cannot read (``exc`` as raised by h5py)."""
+def damaged(path: object, exc: BaseException) -> BaseException:
+    """The error for a file HDF5 cannot read (``exc`` as raised by h5py); or, when ``exc`` was
+    caused by an interruption (Ctrl-C, or a signal the program turns into an exception that is
+    not an :class:`Exception`), which h5py reports as a ``SystemError``, that interruption."""
+    seen: set[int] = set()
+    cause: BaseException | None = exc
+    while cause is not None and id(cause) not in seen:
+        if not isinstance(cause, Exception):
+            return cause
+        seen.add(id(cause))
+        cause = cause.__cause__ or cause.__context__
     return SessionFormatError(
         f"{path}: damaged HDF5 file, cannot be read ({type(exc).__name__}: "
         f"{excerpt(str(exc), 100, quote=False)})"
@@ -116,7 +125,10 @@ def check_h5_file(f: h5py.File, origin: str | Path) -> None:
         try:
             check(name, info)
         except H5_ERRORS as exc:  # HDF5 cannot read this object: report it, stop visiting
-            problem.append(str(damaged(origin, exc)))
+            error = damaged(origin, exc)
+            if not isinstance(error, SessionFormatError):
+                raise error from None
+            problem.append(str(error))
         return 1 if problem else None
 
     def check(name: bytes, info: h5py.h5l.LinkInfo) -> None:
