@@ -13,6 +13,8 @@ class Result:
     ours_s: float
     baseline_s: float
     baseline: str
+    unit: str = "s"
+    """What ours_s and baseline_s count: seconds, or "MiB" for peak memory rows."""
 
     @property
     def speedup(self) -> float:
@@ -43,6 +45,11 @@ def compare(
 
 def report(results: list[Result]) -> None:
     """Print the results as an aligned table."""
-    print(f"{'benchmark':44s} {'ours (s)':>10s} {'baseline (s)':>13s} {'speed-up':>9s}  baseline")
+    print(f"{'benchmark':56s} {'ours':>10s} {'baseline':>10s} {'ratio':>7s}  baseline")
     for r in results:
-        print(f"{r.name:44s} {r.ours_s:10.4f} {r.baseline_s:13.4f} {r.speedup:8.1f}x  {r.baseline}")
+        ours, base = (
+            (f"{r.ours_s:8.4f} s", f"{r.baseline_s:8.4f} s")
+            if r.unit == "s"
+            else (f"{r.ours_s:6.0f} {r.unit}", f"{r.baseline_s:6.0f} {r.unit}")
+        )
+        print(f"{r.name:56s} {ours:>10s} {base:>10s} {r.speedup:6.1f}x  {r.baseline}")

@@ -8,7 +8,7 @@ from anklelab.data import diff_sessions, load_session, save_session
 from anklelab.data._synthetic import random_session
 
 # the function each writer calls once per recording, to make fail part-way through
-WRITERS = {"dir": (directory, "write_csv_recording"), "h5": (hdf5, "_write_recording")}
+WRITERS = {"dir": (directory, "write_csv_recording"), "h5": (hdf5, "_write_layout")}
 
 
 def fail_on_third_call(monkeypatch, fmt, error=None):

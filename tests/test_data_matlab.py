@@ -6,6 +6,8 @@ import h5py
 import numpy as np
 import pytest
 import scipy.io
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
 
 from anklelab.data import diff_sessions, load_session, read_matlab
 from anklelab.data._checks import info_to_mapping
@@ -241,3 +243,101 @@ def test_labels_are_text_or_integers(tmp_path, session):
     assert [t.trial for t in again.walking[:2]] == ["d060_1", "2"]
     assert [t.recording.name for t in again.walking[:2]] == ["d060_1.csv", "trial_0002.csv"]
     assert again.bench[0].test == "bench A" and again.bench[0].recording.name == "bench_A.csv"
+
+
+# --- MAT v7.3 files that are damaged or point elsewhere ---------------------------------------
+
+
+@pytest.fixture
+def mat73(tmp_path, session):
+    path = tmp_path / "s73.mat"
+    write_mat73(path, {"session": as_matlab(session, arrays=struct_list)})
+    return path
+
+
+def first_ref(f, field="fz1"):
+    return f["session/walking"][field][0, 0]
+
+
+def test_v73_truncated(mat73):
+    mat73.write_bytes(mat73.read_bytes()[: mat73.stat().st_size // 2])
+    with pytest.raises(SessionFormatError, match=r"s73\.mat: cannot open as a MATLAB v7\.3 file"):
+        read_matlab(mat73)
+
+
+def test_v73_reference_cycle(mat73):
+    with h5py.File(mat73, "a") as f:
+        walking = f["session/walking"]
+        refs = walking["fz1"][()]
+        refs[1, 0] = walking.ref  # element 2's fz1 is the struct array itself
+        del walking["fz1"]
+        walking.create_dataset("fz1", data=refs)
+    with pytest.raises(
+        SessionFormatError,
+        match=r"s73\.mat: session\.walking\(2\)\.fz1: refers back to a value that contains it",
+    ):
+        read_matlab(mat73)
+
+
+def test_v73_dangling_reference(mat73):
+    with h5py.File(mat73, "a") as f:
+        walking = f["session/walking"]
+        refs = walking["fz2"][()]
+        refs[2, 0] = h5py.Reference()  # a null reference
+        del walking["fz2"]
+        walking.create_dataset("fz2", data=refs)
+    with pytest.raises(SessionFormatError, match=r"session\.walking\(3\)\.fz2: a null reference"):
+        read_matlab(mat73)
+
+
+@pytest.mark.parametrize("kind", ["external", "soft", "dangling"])
+def test_v73_links_are_refused_without_showing_linked_data(tmp_path, mat73, kind):
+    other = tmp_path / "other.h5"
+    with h5py.File(other, "w") as f:
+        f["secret"] = np.full(50, 12345.678)
+    with h5py.File(mat73, "a") as f:
+        del f["session/subject"]
+        link = {
+            "external": h5py.ExternalLink(str(other), "/secret"),
+            "soft": h5py.SoftLink("/session/platform"),
+            "dangling": h5py.SoftLink("/nothing/here"),
+        }[kind]
+        f["session/subject"] = link
+    with pytest.raises(
+        SessionFormatError, match=r"s73\.mat:/session/subject: is an? \w+ link"
+    ) as e:
+        read_matlab(mat73)
+    assert "12345" not in str(e.value)
+
+
+def test_v73_only_the_session_variable_is_read(tmp_path, session):
+    path = tmp_path / "big.mat"
+    write_mat73(path, {"session": as_matlab(session, arrays=struct_list), "other": np.ones((2, 2))})
+    with h5py.File(path, "a") as f:
+        del f["other"]
+        f["other"] = h5py.SoftLink("/nowhere")  # refused anyway: no link is ever followed
+    with pytest.raises(SessionFormatError, match=r"big\.mat:/other: is a soft link"):
+        read_matlab(path)
+
+
+@pytest.fixture(scope="module")
+def pristine73(tmp_path_factory):
+    path = tmp_path_factory.mktemp("fuzz73") / "s73.mat"
+    write_mat73(path, {"session": as_matlab(random_session(n_walking=3), arrays=struct_list)})
+    return path
+
+
+@settings(max_examples=40, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(truncate=st.booleans(), where=st.floats(0, 1, exclude_max=True), bit=st.integers(0, 7))
+def test_fuzz_damaged_v73_files_give_session_format_errors(pristine73, truncate, where, bit):
+    raw = bytearray(pristine73.read_bytes())
+    at = 512 + int(where * (len(raw) - 512))  # past the MATLAB text header
+    raw = raw[:at] if truncate else raw
+    if not truncate:
+        raw[at] ^= 1 << bit
+    path = pristine73.with_name("fuzz.mat")
+    path.write_bytes(bytes(raw))
+    try:
+        read_matlab(path)
+    except SessionFormatError as exc:
+        assert str(path) in str(exc) and "\n" not in str(exc)

@@ -3,6 +3,7 @@
 import hashlib
 import math
 import time
+from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -16,6 +17,7 @@ from anklelab.data import (
     session_hash,
 )
 from anklelab.data._synthetic import random_session
+from anklelab.data.hdf5 import h5_content_hash
 
 
 def sha(path):
@@ -50,7 +52,6 @@ def test_floats_survive_text_round_trip_bit_for_bit(tmp_path):
     tricky = np.array([0.1, 1 / 3, 5e-324, 1.7976931348623157e308, -0.0] + [0.0] * 45)
     rec = s.walking[0].recording
     columns = dict(rec.columns) | {"ankle_angle": tricky}
-    from dataclasses import replace
 
     s = replace(s, walking=(replace(s.walking[0], recording=replace(rec, columns=columns)),))
     back = read_directory(save_session(s, tmp_path / "s", format="dir"))
@@ -66,7 +67,6 @@ def test_two_saves_of_one_session_are_byte_identical(tmp_path):
     assert sha(a) == sha(b)
     # and independent of dict insertion order in the trees
     flipped = dict(reversed(list(s.truth.items())))
-    from dataclasses import replace
 
     c = save_session(replace(s, truth=flipped), tmp_path / "c.h5")
     assert sha(a) == sha(c)
@@ -84,12 +84,27 @@ def test_load_session_detects_kind_and_records_import_provenance(tmp_path):
     assert diff_sessions(from_dir, s, provenance=False) == []
 
 
-def test_session_hash_changes_with_any_file(tmp_path):
+def test_session_hash_pins_every_file_read_and_only_those(tmp_path):
     d = save_session(random_session(), tmp_path / "d", format="dir")
     before = session_hash(d)
     assert session_hash(d) == before
-    (d / "walking" / "notes.txt").write_text("x")
-    assert session_hash(d) != before
+    (d / "walking" / "notes.txt").write_text("x")  # not read: not part of the session
+    assert session_hash(d) == before
+    for name in ("session.toml", "walking/trials.csv", "bench/bench_02.csv", "truth.json"):
+        original = (d / name).read_bytes()
+        (d / name).write_bytes(original + b"\n")
+        assert session_hash(d) != before, name
+        (d / name).write_bytes(original)
+    (d / "calibration" / "cal_01.csv").rename(d / "calibration" / "cal_09.csv")
+    assert session_hash(d) != before  # names count too
+
+
+def test_session_hash_of_h5_is_its_verified_content_hash(tmp_path):
+    s = random_session()
+    a, b = save_session(s, tmp_path / "a.h5"), save_session(s, tmp_path / "b.h5")
+    assert session_hash(a) == session_hash(b) == h5_content_hash(a)
+    changed = save_session(replace(s, provenance={"note": "other"}), tmp_path / "c.h5")
+    assert session_hash(changed) != session_hash(a)
 
 
 def test_truth_none_and_empty_sections_round_trip(tmp_path):
@@ -106,3 +121,11 @@ def test_save_refuses_to_replace_unrelated_directory(tmp_path):
     with pytest.raises(FileExistsError, match=r"session\.toml"):
         save_session(random_session(), tmp_path / "precious", format="dir")
     assert (tmp_path / "precious" / "thesis.tex").exists()
+
+
+def test_sessions_remember_where_they_were_read_from(tmp_path):
+    s = random_session()
+    assert s.source == ""
+    for path in (save_session(s, tmp_path / "d", format="dir"), save_session(s, tmp_path / "s.h5")):
+        back = load_session(path)
+        assert back.source == str(path) and back == replace(back, source="elsewhere")

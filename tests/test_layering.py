@@ -17,6 +17,7 @@ PACKAGE = Path(anklelab.__file__).parent
 
 # top (imported by everything) to bottom, by the first name below ``anklelab``
 RANK = {
+    "_lazy": 0,
     "_params": 0,
     "_atomic": 0,
     "_lock": 0,
@@ -74,13 +75,21 @@ def imports(source: str, parts: tuple[str, ...], is_package: bool = False):
     return found
 
 
-# names that anklelab/__init__.py re-exports -> the module they come from
-REEXPORTS = {
-    alias.name: next(name for _, name in imports(f"from {node.module} import x\n", ()))
-    for node in ast.parse((PACKAGE / "__init__.py").read_text(encoding="utf-8")).body
-    if isinstance(node, ast.ImportFrom) and node.module and node.module.startswith("anklelab.")
-    for alias in node.names
-}
+def _reexports() -> dict[str, tuple[str, ...]]:
+    """Names that anklelab/__init__.py re-exports -> the module they come from: imported ones,
+    and those it loads on first use (its ``_EXPORTS`` table: name -> submodule)."""
+    found = {}
+    for node in ast.parse((PACKAGE / "__init__.py").read_text(encoding="utf-8")).body:
+        if isinstance(node, ast.ImportFrom) and node.module and node.module.startswith("anklelab."):
+            module = next(name for _, name in imports(f"from {node.module} import x\n", ()))
+            found |= {alias.name: module for alias in node.names}
+        elif isinstance(node, ast.Assign) and ast.unparse(node.targets[0]) == "_EXPORTS":
+            pairs = zip(node.value.keys, node.value.values, strict=True)
+            found |= {k.value: (v.value,) for k, v in pairs}
+    return found
+
+
+REEXPORTS = _reexports()
 
 
 def modules() -> list[Path]:
@@ -136,3 +145,5 @@ def test_reader_flags_a_lower_layer(tmp_path):
 
 def test_reexports_are_attributed_to_their_module():
     assert imports("from anklelab import load_platform\n", ("sim", "x")) == [(1, ("platforms",))]
+    assert imports("from anklelab import ParameterError\n", ("sim", "x")) == [(1, ("errors",))]
+    assert imports("from anklelab import __version__\n", ("sim", "x")) == [(1, ("_version",))]

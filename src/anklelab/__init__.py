@@ -1,6 +1,7 @@
 """anklelab: digital twins, controllers and identification for ankle actuation platforms.
 
-Importing anklelab reads no files and does not import matplotlib; subpackages hold the layers of
+Importing anklelab reads no files and imports nothing heavy (no NumPy, SciPy, matplotlib or
+numba): every public name loads its module on first use. Subpackages hold the layers of
 DESIGN.md section 2 (``platforms``, ``sim``, ``control``, ``data``, ``signals``, ``ident``,
 ``pipelines``, ``report``).
 
@@ -9,7 +10,7 @@ DESIGN.md section 2 (``platforms``, ``sim``, ``control``, ``data``, ``signals``,
 20.0
 """
 
-from anklelab._version import __version__
+from anklelab._lazy import lazy_exports
 from anklelab.errors import (
     AnklelabError,
     AnklelabWarning,
@@ -21,36 +22,29 @@ from anklelab.errors import (
     SafetyLimitError,
     SessionFormatError,
 )
-from anklelab.forceplate import (
-    CHANNELS,
-    GrfCopPlate,
-    PlateGeometry,
-    SixAxisPlate,
-    ankle_torque,
-    channels_from_load,
-    resultants,
-    sagittal_load,
-)
-from anklelab.platforms import load_platform
 
+_EXPORTS = {
+    "__version__": "_version",
+    "CHANNELS": "forceplate",
+    "GrfCopPlate": "forceplate",
+    "PlateGeometry": "forceplate",
+    "SixAxisPlate": "forceplate",
+    "ankle_torque": "forceplate",
+    "channels_from_load": "forceplate",
+    "resultants": "forceplate",
+    "sagittal_load": "forceplate",
+    "load_platform": "platforms",
+}
 __all__ = [
-    "CHANNELS",
     "AnklelabError",
     "AnklelabWarning",
     "EventNotFoundError",
-    "GrfCopPlate",
     "NotFittedError",
     "OutputError",
     "ParameterError",
-    "PlateGeometry",
     "ResultsFormatError",
     "SafetyLimitError",
     "SessionFormatError",
-    "SixAxisPlate",
-    "__version__",
-    "ankle_torque",
-    "channels_from_load",
-    "load_platform",
-    "resultants",
-    "sagittal_load",
+    *sorted(_EXPORTS),
 ]
+__getattr__, __dir__ = lazy_exports(__name__, _EXPORTS)

@@ -9,13 +9,14 @@ checks serve the CSV directory, the HDF5 store, MATLAB files and sessions built 
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Iterable, Mapping
+from collections.abc import Callable, Iterable, Mapping, Sequence
 from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
-from anklelab._params import found_instead, parameters_from_mapping
+from anklelab._params import did_you_mean, found_instead, parameters_from_mapping
+from anklelab.data._text import excerpt, plain_text, storable
 from anklelab.data._tree import canonical
 from anklelab.data.session import (
     BENCH_COLUMNS,
@@ -35,18 +36,22 @@ from anklelab.forceplate import PLATE_TYPES, plate_class
 
 __all__ = [
     "MAX_STEP_JITTER",
+    "PLAUSIBLE_M",
     "RATE_TOLERANCE",
+    "SESSION_PLATFORMS",
     "RowLabel",
     "check_bench_tests",
     "check_columns",
     "check_distance",
     "check_recording",
+    "check_recordings",
     "check_unique",
     "check_walking_row",
     "check_walking_trials",
     "info_from_mapping",
     "info_to_mapping",
     "sample_label",
+    "section_columns",
     "validate_session",
 ]
 
@@ -57,6 +62,18 @@ MAX_STEP_JITTER = 0.5
 """Largest deviation of any single time step from ``1 / sample_rate_hz``, as a fraction of it."""
 
 _GEOMETRY_KEYS = ("ankle_height_m", "heel_to_ankle_m")
+SESSION_PLATFORMS = ("perturberator",)
+"""Platforms whose sessions hold walking trials (the capstan platform's identification data
+is a directory of its own)."""
+PLAUSIBLE_M = {
+    "geometry.ankle_height_m": (0.02, 0.25),
+    "geometry.heel_to_ankle_m": (0.0, 0.25),
+    "force_plate.a_m": (0.01, 1.0),
+    "force_plate.b_m": (0.01, 1.0),
+    "force_plate.az0_m": (-0.2, 0.0),
+}
+"""Physically plausible range (m) of each length in ``session.toml``; outside it, the value is
+refused with a hint when it fits in centimetres or millimetres."""
 
 
 def sample_label(index: int) -> str:
@@ -70,10 +87,28 @@ def sample_label(index: int) -> str:
 def _number(data: Mapping[str, Any], key: str, where: str, *, positive: bool) -> float:
     value = data.get(key)
     if isinstance(value, bool) or not isinstance(value, int | float) or not math.isfinite(value):
-        raise SessionFormatError(f"{where}{key}: expected a finite number, got {value!r}")
+        raise SessionFormatError(f"{where}{key}: expected a finite number, got {excerpt(value)}")
     if positive and value <= 0:
-        raise SessionFormatError(f"{where}{key}: expected a number > 0, got {value!r}")
+        raise SessionFormatError(f"{where}{key}: expected a number > 0, got {excerpt(value)}")
     return float(value)
+
+
+def _plausible(value: float, key: str, where: str) -> None:
+    """Refuse a length outside :data:`PLAUSIBLE_M`, hinting at the unit it fits in."""
+    low, high = PLAUSIBLE_M[key]
+    if low <= value <= high:
+        return
+    hint = next(
+        (
+            f": did you give {unit}? "
+            for factor, unit in ((100, "centimetres"), (1000, "millimetres"))
+            if low <= value / factor <= high
+        ),
+        "; ",
+    )
+    raise SessionFormatError(
+        f"{where}{key} = {value:g} m{hint}expected {low:g}–{high:g} m (lengths are in metres)"
+    )
 
 
 def _table(data: Mapping[str, Any], key: str, origin: str, prefix: str) -> dict[str, Any]:
@@ -83,7 +118,7 @@ def _table(data: Mapping[str, Any], key: str, origin: str, prefix: str) -> dict[
             f"{origin}: {prefix}{key}: required table is missing{found_instead(key, data)}"
         )
     if not isinstance(table, Mapping):
-        raise SessionFormatError(f"{origin}: {prefix}{key}: expected a table, got {table!r}")
+        raise SessionFormatError(f"{origin}: {prefix}{key}: expected a table, got {excerpt(table)}")
     return dict(table)
 
 
@@ -111,22 +146,30 @@ def info_from_mapping(data: Mapping[str, Any], origin: str, prefix: str = "") ->
         raise SessionFormatError(f"{origin}: {prefix}{exc}") from None
     where = f"{origin}: {prefix}"
     fmt = data.get("format")
-    if fmt != SESSION_FORMAT:
-        raise SessionFormatError(f"{where}format: expected {SESSION_FORMAT!r}, got {fmt!r}")
+    if not isinstance(fmt, str) or fmt != SESSION_FORMAT:
+        raise SessionFormatError(f"{where}format: expected {SESSION_FORMAT!r}, got {excerpt(fmt)}")
     platform = data.get("platform")
-    if platform not in PLATFORMS:
+    if not isinstance(platform, str) or platform not in PLATFORMS:
         raise SessionFormatError(
-            f"{where}platform: unknown platform {platform!r}; expected one of {sorted(PLATFORMS)}"
+            f"{where}platform: unknown platform {excerpt(platform)}; expected one of "
+            f"{sorted(PLATFORMS)}"
+        )
+    if platform not in SESSION_PLATFORMS:
+        raise SessionFormatError(
+            f"{where}platform: {platform!r} does not record walking sessions; expected one of "
+            f"{', '.join(map(repr, SESSION_PLATFORMS))} (a {platform} identification directory "
+            "is read by `anklelab identify friction`)"
         )
     fs = _number(data, "sample_rate_hz", where, positive=True)
     subject = data.get("subject")
     if not isinstance(subject, str):
-        raise SessionFormatError(f"{where}subject: expected a string, got {subject!r}")
+        raise SessionFormatError(f"{where}subject: expected a string, got {excerpt(subject)}")
     plate = _table(data, "force_plate", origin, prefix)
     plate_type = plate.pop("type", "kistler8")
     if plate_type not in PLATE_TYPES:
         raise SessionFormatError(
-            f"{where}force_plate.type: expected one of {', '.join(PLATE_TYPES)}, got {plate_type!r}"
+            f"{where}force_plate.type: expected one of {', '.join(PLATE_TYPES)}, got "
+            f"{excerpt(plate_type)}"
         )
     plate_model = plate_class(plate_type)
     known = plate_model.model_fields
@@ -149,6 +192,13 @@ def info_from_mapping(data: Mapping[str, Any], origin: str, prefix: str = "") ->
             )
     ankle_height = _number(geometry, "ankle_height_m", f"{where}geometry.", positive=True)
     heel_to_ankle = _number(geometry, "heel_to_ankle_m", f"{where}geometry.", positive=False)
+    lengths = {
+        "geometry.ankle_height_m": ankle_height,
+        "geometry.heel_to_ankle_m": heel_to_ankle,
+    } | {f"force_plate.{k}": getattr(geometry_plate, k, None) for k in ("a_m", "b_m", "az0_m")}
+    for key, value in lengths.items():
+        if value is not None:  # a plate type without this length
+            _plausible(value, key, where)
     extra = {
         k: v
         for k, v in data.items()
@@ -212,6 +262,15 @@ def check_columns(file: str, names: Iterable[str], required: tuple[str, ...], wh
             f"{file}: missing required column(s) {', '.join(map(repr, missing))} in the {where}"
             f"{hints}; expected columns {', '.join(required)} (found {', '.join(names) or 'none'})"
         )
+
+
+def section_columns(info: SessionInfo, section: str) -> tuple[tuple[str, ...], tuple[str, ...]]:
+    """The required and the nullable columns of a section's recordings (``"calibration"``,
+    ``"walking"`` or ``"bench"``) with ``info``'s plate type."""
+    if section == "bench":
+        return BENCH_COLUMNS, ()
+    columns = info.calibration_columns if section == "calibration" else info.walking_columns
+    return columns, info.force_plate.nullable
 
 
 def check_recording(
@@ -296,6 +355,48 @@ def check_recording(
         )
 
 
+def _not_finite(values: NDArray[np.float64]) -> NDArray[np.bool_]:
+    return ~np.isfinite(values)
+
+
+def check_recordings(
+    files: Sequence[str],
+    names: tuple[str, ...],
+    data: NDArray[np.float64],
+    starts: NDArray[np.int64],
+    lengths: NDArray[np.int64],
+    required: tuple[str, ...],
+    fs: float,
+    *,
+    nullable: tuple[str, ...] = (),
+) -> None:
+    """:func:`check_recording` for many recordings stored end to end, in a few array passes.
+
+    Recording ``i`` is ``data[:, starts[i]:starts[i] + lengths[i]]``, its columns named by
+    ``names`` and located by ``files[i]`` in messages; ``nullable`` columns may hold NaN. When
+    the whole block passes the checks at once (every required value finite, or not infinite in
+    a nullable column; every time step within :data:`RATE_TOLERANCE` of ``1 / fs``), each
+    recording would pass on its own; otherwise each is checked on its own, in order, and the
+    first problem is reported with the same message.
+    """
+    if not len(files):
+        return
+    check_columns(files[0], names, required, "columns")
+    period = 1.0 / fs
+    valid = {name: np.isinf if name in nullable else _not_finite for name in required}
+    ok = bool(lengths.min() >= 2) and not any(
+        bad(data[names.index(name)]).any() for name, bad in valid.items()
+    )
+    if ok:
+        step = np.diff(data[names.index("time_s")])
+        step[starts[1:] - 1] = period  # across two recordings
+        ok = bool((np.abs(step - period) <= RATE_TOLERANCE * period).all())
+    if not ok:
+        for file, start, n in zip(files, starts, lengths, strict=True):
+            columns = {name: data[j, start : start + n] for j, name in enumerate(names)}
+            check_recording(file, columns, required, fs, nullable=nullable)
+
+
 # --- manifests ----------------------------------------------------------------------------------
 
 
@@ -303,7 +404,7 @@ def check_walking_row(where: str, perturbed: bool, direction: str, delay_ms: flo
     """Consistency of one manifest row; ``where`` names the file and row."""
     if direction not in DIRECTIONS:
         raise SessionFormatError(
-            f"{where}, column 'direction': got {direction!r}; expected one of "
+            f"{where}, column 'direction': got {excerpt(direction)}; expected one of "
             f"{', '.join(DIRECTIONS)}"
         )
     if perturbed:
@@ -321,7 +422,7 @@ def check_walking_row(where: str, perturbed: bool, direction: str, delay_ms: flo
         if direction != "none":
             raise SessionFormatError(
                 f"{where}, column 'direction': an unperturbed trial (perturbed = 0) needs "
-                f"'none', got {direction!r}"
+                f"'none', got {excerpt(direction)}"
             )
         if not math.isnan(delay_ms):
             raise SessionFormatError(
@@ -336,7 +437,7 @@ def check_unique(items: Iterable[tuple[Any, str]], what: str, file: str) -> None
     for value, where in items:
         if value in seen:
             raise SessionFormatError(
-                f"{file}: {where}: duplicate {what} {value!r} (already at {seen[value]}); "
+                f"{file}: {where}: duplicate {what} {excerpt(value)} (already at {seen[value]}); "
                 f"expected each {what} once"
             )
         seen[value] = where
@@ -370,20 +471,30 @@ def check_bench_tests(file: str, tests: Iterable[tuple[BenchTest, str]]) -> None
 
 
 def _check_names(where: str, recording: Recording) -> None:
+    if not plain_text(recording.name):
+        raise SessionFormatError(
+            f"{where}: recording name {excerpt(recording.name)}; expected non-empty text "
+            "without surrounding spaces, line breaks or NUL characters"
+        )
     for name in recording.columns:
-        if not isinstance(name, str) or not name or name != name.strip() or "\n" in name:
+        if not plain_text(name):
             raise SessionFormatError(
-                f"{where}: column name {name!r}; expected non-empty text without surrounding "
-                "spaces or line breaks"
+                f"{where}: column name {excerpt(name)}; expected non-empty text without "
+                "surrounding spaces, line breaks or NUL characters"
             )
 
 
 def _check_extra(where: str, extra: Mapping[str, str], reserved: tuple[str, ...]) -> None:
     for key, value in extra.items():
-        if key in reserved or not isinstance(value, str):
+        if (
+            key in reserved
+            or not plain_text(key)
+            or not isinstance(value, str)
+            or not storable(value)
+        ):
             raise SessionFormatError(
-                f"{where}: extra manifest field {key!r} = {value!r}; expected a text value under "
-                f"a name other than {', '.join(reserved)}"
+                f"{where}: extra manifest field {excerpt(key)} = {excerpt(value)}; expected a "
+                f"text value under a name other than {', '.join(reserved)}"
             )
 
 
@@ -400,12 +511,12 @@ def validate_session(session: Session, origin: str = "session") -> None:
     info = session.info
     fs, nullable = info.sample_rate_hz, info.force_plate.nullable
     for i, rec in enumerate(session.calibration):
-        where = f"{origin}.calibration[{i}] {rec.name!r}"
+        where = f"{origin}.calibration[{i}] {excerpt(rec.name)}"
         _check_names(where, rec)
         check_recording(where, rec.columns, info.calibration_columns, fs, nullable=nullable)
     labelled = []
     for i, trial in enumerate(session.walking):
-        where = f"{origin}.walking[{i}] {trial.recording.name!r}"
+        where = f"{origin}.walking[{i}] {excerpt(trial.recording.name)}"
         label_text(trial.trial, f"{where}: trial")
         check_walking_row(where, trial.perturbed, trial.direction, trial.delay_ms)
         _check_names(where, trial.recording)
@@ -415,7 +526,7 @@ def validate_session(session: Session, origin: str = "session") -> None:
         labelled.append((trial, f"walking[{i}]"))
     check_walking_trials(f"{origin}.walking", labelled)
     for i, test in enumerate(session.bench):
-        where = f"{origin}.bench[{i}] {test.recording.name!r}"
+        where = f"{origin}.bench[{i}] {excerpt(test.recording.name)}"
         label_text(test.test, f"{where}: test")
         _check_names(where, test.recording)
         _check_extra(where, test.extra, BENCH_MANIFEST_COLUMNS)

@@ -12,7 +12,7 @@ from __future__ import annotations
 import hashlib
 import math
 import tomllib
-from collections.abc import Iterator, Mapping
+from collections.abc import Iterator, Mapping, Sequence
 from contextlib import contextmanager
 from pathlib import Path
 from typing import Any, TypeVar
@@ -184,15 +184,22 @@ def naming_the_mapping(path: Path) -> Iterator[None]:
         raise ParameterError(f"{path}: {exc}") from None
 
 
-def import_provenance(source: Path, importer: str, mapping: Path) -> dict[str, Any]:
+def import_provenance(
+    source: Path, importer: str, mapping: Path, files: Sequence[Path] = ()
+) -> dict[str, Any]:
     """The provenance of a session imported from ``source`` through ``mapping``: anklelab's
-    version, the source's content hash and the mapping's SHA-256."""
+    version, the source's content hash and the mapping's SHA-256.
+
+    The source's hash is that of the file ``source``, or, for a directory, of the ``files``
+    inside it that were read, in order (:func:`~anklelab.data.directory.files_hash`).
+    """
     from anklelab._version import __version__
+    from anklelab.data.directory import files_hash
     from anklelab.data.store import session_hash
 
     return {
         "anklelab_version": __version__,
-        "source_sha256": session_hash(source),
+        "source_sha256": files_hash(source, files) if files else session_hash(source),
         "import": {
             "anklelab_version": __version__,
             "importer": importer,

@@ -29,6 +29,8 @@ from typing import Any
 import h5py
 import numpy as np
 
+from anklelab.data._text import storable
+
 __all__ = [
     "canonical",
     "create_group",
@@ -57,25 +59,16 @@ def canonical(tree: Mapping[str, Any], path: str = "") -> dict[str, Any]:
         raise ValueError(f"{path or 'tree'}: expected a mapping, got {type(tree).__name__}")
     out = {}
     for key, value in tree.items():
-        if not isinstance(key, str) or not key or not _storable(key):
+        if not isinstance(key, str) or not key or not storable(key):
             raise ValueError(f"{path}{key!r}: keys must be non-empty UTF-8 strings without NUL")
         out[key] = _value(value, f"{path}{key}")
     return out
 
 
-def _storable(text: str) -> bool:
-    """Whether HDF5, JSON and TOML files can all hold ``text`` (UTF-8, no NUL)."""
-    try:
-        text.encode("utf-8")
-    except UnicodeEncodeError:  # a lone surrogate
-        return False
-    return "\x00" not in text
-
-
 def _value(value: Any, path: str) -> Any:
     if isinstance(value, Mapping):
         return canonical(value, path + ".")
-    if isinstance(value, str) and not _storable(value):
+    if isinstance(value, str) and not storable(value):
         raise ValueError(f"{path}: text must be UTF-8 without NUL characters to be stored")
     if value is None or isinstance(value, bool | str):
         return value

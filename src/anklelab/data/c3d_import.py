@@ -382,7 +382,9 @@ def _import(root: Path, mapping: Path, spec: C3DMapping, workers: int) -> Sessio
         raise SessionFormatError(f"{root}: no calibration or walking trial to take the plate from")
     plate_table.setdefault("anterior_axis", "+x")
     info = session_info(spec.session, rate, plate_table)
-    provenance = import_provenance(root, "c3d", mapping)
+    listed = [root / spec.trials.file] if isinstance(spec.trials, TrialsFromCsv) else []
+    read = [*listed, *(path for _, path, _ in entries)]
+    provenance = import_provenance(root, "c3d", mapping, read)
     return Session(info, tuple(calibration), tuple(walking), tuple(bench), None, provenance)
 
 

@@ -17,7 +17,6 @@ strictly increasing at ``sample_rate_hz``; messages name file, column and line).
 from __future__ import annotations
 
 import json
-import tomllib
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -26,11 +25,14 @@ import numpy as np
 from numpy.typing import NDArray
 
 from anklelab._atomic import atomic_directory
+from anklelab.data._files import MAX_JSON_BYTES
+from anklelab.data._text import excerpt
 from anklelab.data.directory import (
+    SessionReader,
     _manifest,
     _manifest_rows,
-    _read_text,
     read_csv_recording,
+    read_session_toml,
     write_csv_recording,
 )
 from anklelab.data.session import SESSION_FORMAT, Recording
@@ -82,30 +84,29 @@ class IdentData:
     truth: dict[str, Any] | None = None
 
 
-def _session_toml(path: Path) -> float:
-    file = path / "session.toml"
-    try:
-        meta = tomllib.loads(_read_text(file))
-    except tomllib.TOMLDecodeError as exc:
-        raise SessionFormatError(f"{file}: not valid TOML: {exc}") from None
+def _session_toml(reader: SessionReader) -> float:
+    file = reader.root / "session.toml"
+    meta = read_session_toml(reader, file)
     expected = {"format": SESSION_FORMAT, "platform": "capstan"}
     for key, value in expected.items():
         if meta.get(key) != value:
-            raise SessionFormatError(f"{file}: {key} = {meta.get(key)!r}; expected {value!r}")
+            raise SessionFormatError(
+                f"{file}: {key} = {excerpt(meta.get(key))}; expected {value!r}"
+            )
     fs = meta.get("sample_rate_hz")
     if isinstance(fs, bool) or not isinstance(fs, int | float) or not fs > 0:
-        raise SessionFormatError(f"{file}: sample_rate_hz = {fs!r}; expected a number > 0")
+        raise SessionFormatError(f"{file}: sample_rate_hz = {excerpt(fs)}; expected a number > 0")
     return float(fs)
 
 
-def _run(path: Path, columns: tuple[str, ...], fs: float) -> IdentRun:
-    rec = read_csv_recording(path, columns, fs)
+def _run(reader: SessionReader, path: Path, columns: tuple[str, ...], fs: float) -> IdentRun:
+    rec = read_csv_recording(path, columns, fs, reader=reader)
     return IdentRun(path.name, rec["time_s"], rec["velocity_rad_s"], rec["torque_nm"])
 
 
-def _spindown_files(folder: Path) -> list[Path]:
+def _spindown_files(reader: SessionReader, folder: Path) -> list[Path]:
     paths = []
-    for _, where, row, path, _ in _manifest_rows(folder, "runs.csv", RUNS_COLUMNS):
+    for _, where, row, path, _ in _manifest_rows(reader, folder, "runs.csv", RUNS_COLUMNS):
         if not row["run"]:
             raise SessionFormatError(f"{where}, column 'run': empty; expected a run label")
         paths.append(path)
@@ -123,15 +124,26 @@ def read_ident_directory(path: str | Path) -> IdentData:
     path = Path(path)
     if not path.is_dir():
         raise SessionFormatError(f"{path}: not a directory; expected an identification session")
-    fs = _session_toml(path)
-    spindown = tuple(_run(p, SPINDOWN_COLUMNS, fs) for p in _spindown_files(path / "spindown"))
+    reader = SessionReader(path)
+    fs = _session_toml(reader)
+    spindown = tuple(
+        _run(reader, p, SPINDOWN_COLUMNS, fs) for p in _spindown_files(reader, path / "spindown")
+    )
     chirp_dir = path / "chirp"
     chirps = sorted(chirp_dir.glob("*.csv")) if chirp_dir.is_dir() else []
     if not chirps:
         raise SessionFormatError(f"{chirp_dir}: no CSV files; expected at least one torque chirp")
-    chirp = tuple(_run(p, CHIRP_COLUMNS, fs) for p in chirps)
+    chirp = tuple(_run(reader, p, CHIRP_COLUMNS, fs) for p in chirps)
     truth_file = path / "truth.json"
-    truth = json.loads(truth_file.read_text()) if truth_file.is_file() else None
+    truth = None
+    if truth_file.exists():
+        text = reader.text(truth_file, MAX_JSON_BYTES, "a JSON file")
+        try:
+            truth = json.loads(text)
+        except (json.JSONDecodeError, RecursionError):
+            raise SessionFormatError(
+                f"{truth_file}: not valid JSON; expected a JSON object"
+            ) from None
     return IdentData(fs, spindown, chirp, truth)
 
 

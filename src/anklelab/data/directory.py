@@ -18,20 +18,28 @@ folder is optional; a folder that exists must be complete. Unknown columns are k
 (recordings: as float columns; manifests: as strings in ``extra``), unknown files are ignored.
 Error messages name the file, the column and the CSV **line** (line 1 is the header).
 
-Numbers are parsed by :func:`numpy.loadtxt` (C parser, one call per file); only when that fails
-is the file scanned row by row to say which cell is wrong. The writer prints every float with
-its shortest exact representation, so reading a written directory gives bit-identical arrays.
+Only regular files inside the directory are read (a symbolic link may point elsewhere inside it,
+never outside), each up to a size limit checked before reading (:mod:`anklelab.data._files`).
+Numbers are parsed by pyarrow's CSV reader, files in parallel threads; only when it refuses a
+file is the file scanned row by row to say which cell is wrong (:mod:`anklelab.data._csv`).
+Messages show at most a short escaped excerpt of a file's content. The writer prints every float
+with its shortest exact representation, so reading a written directory gives bit-identical
+arrays.
 """
 
 from __future__ import annotations
 
 import csv
+import hashlib
 import io
 import json
 import math
+import os
 import re
 import tomllib
 from collections.abc import Callable, Iterable, Iterator, Mapping
+from concurrent.futures import ThreadPoolExecutor
+from dataclasses import dataclass
 from functools import partial
 from pathlib import Path
 from typing import Any
@@ -41,14 +49,23 @@ import numpy as np
 from anklelab._atomic import atomic_directory
 from anklelab.data import _toml
 from anklelab.data._checks import (
-    check_columns,
     check_distance,
     check_recording,
     check_unique,
     check_walking_row,
+    excerpt,
     info_from_mapping,
     info_to_mapping,
     validate_session,
+)
+from anklelab.data._csv import NUMBER, decode, header, parse_numeric
+from anklelab.data._files import (
+    MAX_CSV_BYTES,
+    MAX_JSON_BYTES,
+    MAX_MANIFEST_BYTES,
+    MAX_TOML_BYTES,
+    file_problem,
+    read_bytes,
 )
 from anklelab.data._progress import Progress, ticker
 from anklelab.data._tree import from_json, to_json
@@ -60,93 +77,94 @@ from anklelab.data.session import (
     Recording,
     Session,
     WalkingTrial,
+    label_text,
 )
 from anklelab.errors import SessionFormatError
 
 __all__ = [
+    "SessionReader",
+    "directory_hash",
+    "files_hash",
     "read_csv_recording",
     "read_directory",
+    "read_session_toml",
     "write_csv_recording",
     "write_directory",
 ]
 
 
+_WORKERS = min(4, os.cpu_count() or 1)
+"""Threads parsing recording files at once (pyarrow parses without holding the GIL)."""
+
 # --- reading ------------------------------------------------------------------------------------
 
 
-def _read_text(path: Path) -> str:
-    try:
-        return path.read_text(encoding="utf-8-sig")
-    except FileNotFoundError:
-        raise SessionFormatError(f"{path}: file not found") from None
-    except UnicodeDecodeError as exc:
-        raise SessionFormatError(
-            f"{path}: not UTF-8 text ({exc.reason} at byte {exc.start}); expected a CSV file"
-        ) from None
+class SessionReader:
+    """Reads the files of one session directory, only from inside it, and remembers the SHA-256
+    of each file read (see :func:`~anklelab.data._files.read_bytes` for what is refused).
 
+    Parameters
+    ----------
+    root : Path
+        The session directory; messages name files below it as the user gave it.
+    """
 
-def _header(path: Path, text: str, required: tuple[str, ...]) -> list[str]:
-    first = text.split("\n", 1)[0]
-    if not first.strip():
-        raise SessionFormatError(
-            f"{path}: empty file or blank line 1; expected a header line naming the columns "
-            f"{', '.join(required)}"
-        )
-    names = [name.strip() for name in next(csv.reader([first]))]
-    if len(names) == 1 and any(sep in first for sep in ";\t"):
-        raise SessionFormatError(
-            f"{path}: header (line 1) {first.strip()!r} is not comma-separated; expected the "
-            f"columns {', '.join(required)} separated by commas"
-        )
-    if "" in names:
-        raise SessionFormatError(
-            f"{path}: column {names.index('') + 1} of the header (line 1) has no name; expected "
-            "a name for every column"
-        )
-    check_columns(str(path), names, required, "header (line 1)")
-    return names
+    def __init__(self, root: Path) -> None:
+        self.root = root
+        self.digests: dict[Path, bytes] = {}
 
+    def bytes(self, path: Path, limit: int, expected: str = "a CSV file") -> bytes:
+        """The bytes of ``path`` (inside the session, at most ``limit`` bytes)."""
+        data = read_bytes(path, self.root, limit, expected)
+        self.digests[path] = hashlib.sha256(data).digest()
+        return data
 
-def _data_line(text: str, index: int) -> str:
-    """CSV line number of data row ``index`` (0-based; blank lines are skipped by the parser)."""
-    lines = [k + 1 for k, line in enumerate(text.split("\n")) if k > 0 and line.strip()]
-    return f"line {lines[index]}"
+    def text(self, path: Path, limit: int, expected: str = "a CSV file") -> str:
+        """The text of ``path`` (UTF-8, optional byte-order mark)."""
+        return decode(path, self.bytes(path, limit, expected), expected)
 
-
-def _empty_as_nan(cell: str) -> float:
-    return float(cell) if cell.strip() else math.nan
-
-
-def _bad_cell(
-    path: Path, text: str, names: list[str], nullable: tuple[str, ...] = ()
-) -> SessionFormatError | None:
-    """Locate the first malformed row or cell (slow path, only after the fast parser failed)."""
-    reader = csv.reader(io.StringIO(text))
-    next(reader)
-    for fields in reader:
-        line = reader.line_num
-        if not any(field.strip() for field in fields):
-            continue
-        if len(fields) != len(names):
-            return SessionFormatError(
-                f"{path}: line {line} has {len(fields)} fields; expected {len(names)} like the "
-                "header (line 1)"
+    def data_file(self, folder: Path, name: str, where: str) -> Path:
+        """The recording file a manifest row names: a plain name of a regular file in
+        ``folder``."""
+        if not name or name in (".", "..") or "/" in name or "\\" in name:
+            raise SessionFormatError(
+                f"{where}, column 'file': got {excerpt(name)}; expected a file name inside {folder}"
             )
-        for name, field in zip(names, fields, strict=True):
-            if name in nullable and not field.strip():
-                continue
-            try:
-                float(field)
-            except ValueError:
-                got = "an empty cell" if not field.strip() else repr(field)
-                return SessionFormatError(
-                    f"{path}: column {name!r}, line {line}: {got}; expected a number"
-                )
-    return None
+        path = folder / name
+        problem = file_problem(path, self.root)
+        if problem:
+            raise SessionFormatError(f"{where}, column 'file': {path} {problem}")
+        return path
+
+    def sha256(self, files: Iterable[Path]) -> str:
+        """SHA-256 (hex) over ``files`` in order: each one's path relative to the session and
+        the SHA-256 of its bytes (read now unless already read)."""
+        digest = hashlib.sha256()
+        for path in files:
+            if path not in self.digests:
+                self.bytes(path, max(MAX_CSV_BYTES, MAX_JSON_BYTES), "a session file")
+            digest.update(path.relative_to(self.root).as_posix().encode() + b"\0")
+            digest.update(self.digests[path])
+        return digest.hexdigest()
+
+
+def _recording(
+    path: Path, data: bytes, required: tuple[str, ...], fs: float, nullable: tuple[str, ...]
+) -> Recording:
+    names = header(path, data, required)
+    values, line = parse_numeric(path, data, names, nullable)
+    columns = dict(zip(names, values, strict=True))
+    check_recording(str(path), columns, required, fs, line, nullable=nullable)
+    return Recording(path.name, columns)
 
 
 def read_csv_recording(
-    path: Path, required: tuple[str, ...], fs: float, *, nullable: tuple[str, ...] = ()
+    path: Path,
+    required: tuple[str, ...],
+    fs: float,
+    *,
+    nullable: tuple[str, ...] = (),
+    reader: SessionReader | None = None,
 ) -> Recording:
     """Read and check one recording file.
 
@@ -160,54 +178,36 @@ def read_csv_recording(
         Sample rate from ``session.toml``, Hz; the ``time_s`` column must agree with it.
     nullable : tuple of str
         Required columns whose cells may be empty (read as NaN).
+    reader : SessionReader, optional
+        The session's reader (the file must lie inside its directory); by default the file's
+        own folder.
     """
-    text = _read_text(path)
-    names = _header(path, text, required)
-    body = text.split("\n", 1)[1] if "\n" in text else ""
-    if not body.strip():
-        raise SessionFormatError(f"{path}: no data rows after the header; expected samples")
-    try:
-        data = np.loadtxt(
-            io.StringIO(body),
-            delimiter=",",
-            dtype=np.float64,
-            ndmin=2,
-            comments=None,
-            quotechar='"',
-            converters=_empty_as_nan if nullable else None,
-        )
-    except ValueError as exc:
-        raise _bad_cell(path, text, names, nullable) or SessionFormatError(
-            f"{path}: {exc}"
-        ) from None
-    if data.shape[1] != len(names):
-        raise _bad_cell(path, text, names, nullable) or SessionFormatError(
-            f"{path}: {data.shape[1]} fields per row; expected {len(names)} like the header"
-        )
-    columns = dict(zip(names, np.ascontiguousarray(data.T), strict=True))
-    row = partial(_data_line, text)
-    check_recording(str(path), columns, required, fs, row, nullable=nullable)
-    return Recording(path.name, columns)
+    reader = reader or SessionReader(path.parent)
+    return _recording(path, reader.bytes(path, MAX_CSV_BYTES), required, fs, nullable)
 
 
-def _read_manifest(path: Path, required: tuple[str, ...]) -> list[tuple[str, dict[str, str]]]:
+def _read_manifest(
+    reader: SessionReader, path: Path, required: tuple[str, ...]
+) -> list[tuple[str, dict[str, str]]]:
     """Rows of a manifest as (``"line N"``, {column: stripped text})."""
-    text = _read_text(path)
-    names = _header(path, text, required)
-    reader = csv.reader(io.StringIO(text))
-    next(reader)
+    data = reader.bytes(path, MAX_MANIFEST_BYTES, "a manifest (CSV file)")
+    names = header(path, data, required)
     rows = []
-    for fields in reader:
-        if not any(field.strip() for field in fields):
-            continue
-        if len(fields) != len(names):
-            raise SessionFormatError(
-                f"{path}: line {reader.line_num} has {len(fields)} fields; expected "
-                f"{len(names)} like the header (line 1)"
-            )
-        rows.append(
-            (f"line {reader.line_num}", {n: f.strip() for n, f in zip(names, fields, strict=True)})
-        )
+    table = csv.reader(io.StringIO(decode(path, data)))
+    try:
+        next(table)
+        for fields in table:
+            if not any(field.strip() for field in fields):
+                continue
+            if len(fields) != len(names):
+                raise SessionFormatError(
+                    f"{path}: line {table.line_num} has {len(fields)} fields; expected "
+                    f"{len(names)} like the header (line 1)"
+                )
+            row = {n: f.strip() for n, f in zip(names, fields, strict=True)}
+            rows.append((f"line {table.line_num}", row))
+    except csv.Error as exc:
+        raise SessionFormatError(f"{path}: line {max(table.line_num, 1)}: {exc}") from None
     if not rows:
         raise SessionFormatError(f"{path}: no rows after the header; expected one row per file")
     return rows
@@ -218,37 +218,27 @@ def _label(text: str, where: str, column: str) -> str:
         raise SessionFormatError(
             f"{where}, column {column!r}: empty cell; expected a label (any non-empty text)"
         )
-    return text
+    return label_text(text, f"{where}, column {column!r}")
 
 
 def _float(text: str, where: str, column: str, *, empty_ok: bool = False) -> float:
     if empty_ok and text.lower() in ("", "nan"):
         return math.nan
-    try:
-        return float(text)
-    except ValueError:
+    if not NUMBER.fullmatch(text):
         raise SessionFormatError(
-            f"{where}, column {column!r}: got {text!r}; expected a number"
+            f"{where}, column {column!r}: got {excerpt(text)}; expected a number"
             + (" or an empty cell" if empty_ok else "")
-        ) from None
+        )
+    return float(text)
 
 
 def _flag(text: str, where: str, column: str) -> bool:
     flags = {"0": False, "1": True, "false": False, "true": True}
     if text.lower() not in flags:
-        raise SessionFormatError(f"{where}, column {column!r}: got {text!r}; expected 0 or 1")
-    return flags[text.lower()]
-
-
-def _data_file(folder: Path, name: str, where: str) -> Path:
-    if not name or name in (".", "..") or "/" in name or "\\" in name:
         raise SessionFormatError(
-            f"{where}, column 'file': got {name!r}; expected a file name inside {folder}"
+            f"{where}, column {column!r}: got {excerpt(text)}; expected 0 or 1"
         )
-    path = folder / name
-    if not path.is_file():
-        raise SessionFormatError(f"{where}, column 'file': {path} does not exist")
-    return path
+    return flags[text.lower()]
 
 
 # Each manifest row, checked, with the data file to read and how to build the trial from it.
@@ -256,25 +246,25 @@ Row = tuple[Path, Callable[..., Any]]
 
 
 def _manifest_rows(
-    folder: Path, name: str, columns: tuple[str, ...]
+    reader: SessionReader, folder: Path, name: str, columns: tuple[str, ...]
 ) -> Iterator[tuple[str, str, dict[str, str], Path, dict[str, str]]]:
     """(line, location, fields, data file, extra fields) of each manifest row."""
     manifest = folder / name
-    if not manifest.is_file():
+    if file_problem(manifest, reader.root) == "does not exist":
         raise SessionFormatError(f"{manifest}: missing; a {folder.name}/ folder needs its manifest")
-    rows = _read_manifest(manifest, columns)
+    rows = _read_manifest(reader, manifest, columns)
     check_unique(((row["file"], line) for line, row in rows), "file", str(manifest))
     for line, row in rows:
         where = f"{manifest}: {line}"
         extra = {k: v for k, v in row.items() if k not in columns}
-        yield line, where, row, _data_file(folder, row["file"], where), extra
+        yield line, where, row, reader.data_file(folder, row["file"], where), extra
 
 
-def _walking_rows(folder: Path) -> list[Row]:
+def _walking_rows(reader: SessionReader, folder: Path) -> list[Row]:
     rows: list[Row] = []
     ids: list[tuple[str, str]] = []
     for line, where, row, path, extra in _manifest_rows(
-        folder, "trials.csv", WALKING_MANIFEST_COLUMNS
+        reader, folder, "trials.csv", WALKING_MANIFEST_COLUMNS
     ):
         trial = _label(row["trial"], where, "trial")
         perturbed = _flag(row["perturbed"], where, "perturbed")
@@ -295,11 +285,11 @@ def _walking_rows(folder: Path) -> list[Row]:
     return rows
 
 
-def _bench_rows(folder: Path) -> list[Row]:
+def _bench_rows(reader: SessionReader, folder: Path) -> list[Row]:
     rows: list[Row] = []
     ids: list[tuple[str, str]] = []
     for line, where, row, path, extra in _manifest_rows(
-        folder, "tests.csv", BENCH_MANIFEST_COLUMNS
+        reader, folder, "tests.csv", BENCH_MANIFEST_COLUMNS
     ):
         test = _label(row["test"], where, "test")
         distance = _float(row["distance_m"], where, "distance_m")
@@ -314,21 +304,153 @@ def _natural(path: Path) -> list[Any]:
     return [int(part) if part.isdigit() else part for part in re.split(r"(\d+)", path.name)]
 
 
-def _json_tree(path: Path) -> dict[str, Any] | None:
-    if not path.is_file():
-        return None
+def _json_tree(reader: SessionReader, path: Path) -> dict[str, Any]:
+    text = reader.text(path, MAX_JSON_BYTES, "a JSON file")
     try:
-        return from_json(_read_text(path))
+        return from_json(text)
     except json.JSONDecodeError as exc:
         raise SessionFormatError(
             f"{path}: line {exc.lineno}, column {exc.colno}: {exc.msg}; expected JSON"
         ) from None
+    except RecursionError:
+        raise SessionFormatError(f"{path}: nested too deeply; expected a JSON tree") from None
     except ValueError as exc:
-        raise SessionFormatError(f"{path}: {exc}") from None
+        raise SessionFormatError(f"{path}: {excerpt(str(exc), 200, quote=False)}") from None
+
+
+def read_session_toml(reader: SessionReader, path: Path) -> dict[str, Any]:
+    """The parsed ``session.toml`` (size-limited, deep nesting refused)."""
+    text = reader.text(path, MAX_TOML_BYTES, "a TOML file")
+    try:
+        return tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise SessionFormatError(f"{path}: not valid TOML: {exc}") from None
+    except RecursionError:
+        raise SessionFormatError(f"{path}: tables or arrays nested too deeply") from None
+
+
+@dataclass(frozen=True)
+class _Plan:
+    """What a session directory holds, in reading order (manifests already read)."""
+
+    toml: Path
+    calibration: list[Path]
+    walking: list[Row]
+    bench: list[Row]
+    trees: dict[str, Path]
+
+    def files(self, root: Path) -> list[Path]:
+        """Every file read, in order."""
+        walking = [root / "walking" / "trials.csv"] if self.walking else []
+        bench = [root / "bench" / "tests.csv"] if self.bench else []
+        return [
+            self.toml,
+            *self.calibration,
+            *walking,
+            *(p for p, _ in self.walking),
+            *bench,
+            *(p for p, _ in self.bench),
+            *self.trees.values(),
+        ]
+
+
+def _reader(path: str | Path) -> SessionReader:
+    root = Path(path)
+    if not root.is_dir():
+        raise SessionFormatError(f"{root}: not a directory; expected a session directory")
+    return SessionReader(root)
+
+
+def _plan(reader: SessionReader) -> _Plan:
+    root = reader.root
+    toml = root / "session.toml"
+    calibration = sorted((root / "calibration").glob("*.csv"), key=_natural)
+    for path in calibration:
+        if problem := file_problem(path, root):
+            raise SessionFormatError(f"{path}: {problem}")
+    walking = _walking_rows(reader, root / "walking") if (root / "walking").is_dir() else []
+    bench = _bench_rows(reader, root / "bench") if (root / "bench").is_dir() else []
+    trees = {
+        name: root / f"{name}.json"
+        for name in ("truth", "provenance")
+        if os.path.lexists(root / f"{name}.json")
+    }
+    return _Plan(toml, calibration, walking, bench, trees)
+
+
+def directory_hash(path: str | Path) -> str:
+    """SHA-256 (hex) of every file :func:`read_directory` reads, in its order: ``session.toml``,
+    the calibration files, the walking manifest and its files, the bench manifest and its files,
+    ``truth.json`` and ``provenance.json``; each as its path relative to the session and the
+    SHA-256 of its bytes. Files the reader ignores do not count."""
+    reader = _reader(path)
+    plan = _plan(reader)
+    return reader.sha256(plan.files(reader.root))
+
+
+def files_hash(root: str | Path, files: Iterable[Path]) -> str:
+    """SHA-256 (hex) over ``files``, regular files inside the directory ``root``, in the order
+    given: each as its path relative to ``root`` and the SHA-256 of its bytes (as
+    :func:`directory_hash` pins a session directory), for importers that read other layouts."""
+    return SessionReader(Path(root)).sha256(files)
+
+
+def _read_directory(path: str | Path, progress: Progress | None) -> tuple[Session, str]:
+    """The session and the SHA-256 of every file read (:func:`directory_hash`)."""
+    reader = _reader(path)
+    info = info_from_mapping(
+        read_session_toml(reader, reader.root / "session.toml"), str(reader.root / "session.toml")
+    )
+    plan = _plan(reader)
+    fs = info.sample_rate_hz
+    nullable = info.force_plate.nullable
+    jobs = [
+        *((p, info.calibration_columns, nullable) for p in plan.calibration),
+        *((p, info.walking_columns, nullable) for p, _ in plan.walking),
+        *((p, BENCH_COLUMNS, ()) for p, _ in plan.bench),
+    ]
+    tick = ticker(progress, len(jobs))
+
+    def read(job: tuple[Path, tuple[str, ...], tuple[str, ...]]) -> Recording:
+        path, required, nulls = job
+        return read_csv_recording(path, required, fs, nullable=nulls, reader=reader)
+
+    with ThreadPoolExecutor(max_workers=_WORKERS) as pool:  # pyarrow parses without the GIL
+        try:
+            trees = {name: pool.submit(_json_tree, reader, p) for name, p in plan.trees.items()}
+            recordings = []
+            for recording in pool.map(read, jobs):
+                recordings.append(recording)
+                tick()
+            truth = trees["truth"].result() if "truth" in trees else None
+            provenance = trees["provenance"].result() if "provenance" in trees else {}
+        except BaseException:  # the first problem is reported without reading the rest
+            pool.shutdown(wait=False, cancel_futures=True)
+            raise
+    n_cal, n_walk = len(plan.calibration), len(plan.walking)
+    session = Session(
+        info=info,
+        calibration=tuple(recordings[:n_cal]),
+        walking=tuple(
+            make(recording=r)
+            for (_, make), r in zip(plan.walking, recordings[n_cal : n_cal + n_walk], strict=True)
+        ),
+        bench=tuple(
+            make(recording=r)
+            for (_, make), r in zip(plan.bench, recordings[n_cal + n_walk :], strict=True)
+        ),
+        truth=truth,
+        provenance=provenance,
+        source=str(reader.root),
+    )
+    return session, reader.sha256(plan.files(reader.root))
 
 
 def read_directory(path: str | Path, *, progress: Progress | None = None) -> Session:
     """Read and validate a CSV session directory.
+
+    Recording files are parsed in parallel threads; only regular files inside the directory
+    are read (links may point inside it, never outside), each up to a size limit.
 
     Parameters
     ----------
@@ -347,40 +469,7 @@ def read_directory(path: str | Path, *, progress: Progress | None = None) -> Ses
     SessionFormatError
         Naming the file, column and CSV line of the first problem found.
     """
-    root = Path(path)
-    toml_path = root / "session.toml"
-    if not root.is_dir():
-        raise SessionFormatError(f"{root}: not a directory; expected a session directory")
-    try:
-        document = tomllib.loads(_read_text(toml_path))
-    except tomllib.TOMLDecodeError as exc:
-        raise SessionFormatError(f"{toml_path}: not valid TOML: {exc}") from None
-    info = info_from_mapping(document, str(toml_path))
-    fs = info.sample_rate_hz
-    calibration_files = sorted((root / "calibration").glob("*.csv"), key=_natural)
-    walking_rows = _walking_rows(root / "walking") if (root / "walking").is_dir() else []
-    bench_rows = _bench_rows(root / "bench") if (root / "bench").is_dir() else []
-    tick = ticker(progress, len(calibration_files) + len(walking_rows) + len(bench_rows))
-
-    def read(path: Path, required: tuple[str, ...], nullable: tuple[str, ...] = ()) -> Recording:
-        recording = read_csv_recording(path, required, fs, nullable=nullable)
-        tick()
-        return recording
-
-    nullable = info.force_plate.nullable
-    calibration = tuple(read(p, info.calibration_columns, nullable) for p in calibration_files)
-    walking = tuple(
-        make(recording=read(p, info.walking_columns, nullable)) for p, make in walking_rows
-    )
-    bench = tuple(make(recording=read(p, BENCH_COLUMNS)) for p, make in bench_rows)
-    return Session(
-        info=info,
-        calibration=calibration,
-        walking=walking,
-        bench=bench,
-        truth=_json_tree(root / "truth.json"),
-        provenance=_json_tree(root / "provenance.json") or {},
-    )
+    return _read_directory(path, progress)[0]
 
 
 # --- writing ------------------------------------------------------------------------------------

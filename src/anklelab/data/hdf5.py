@@ -1,25 +1,50 @@
-"""The native HDF5 session store (format ``anklelab-h5/1``): reader and atomic writer.
+"""The native HDF5 session store (format ``anklelab-h5/2``): reader and atomic writer.
 
-The file mirrors the session directory::
+The file is laid out for reading a whole session at once::
 
-    /                       attribute format = "anklelab-h5/1"
-    /session                the session.toml document (keys as attributes, tables as groups)
-    /calibration/<file>     one group per recording, one float64 dataset per column
-    /walking/<file>         same, with attributes trial (text label), perturbed, direction,
-                            delay_ms and any further manifest columns (strings)
-    /bench/<file>           same, with attributes test (text label), distance_m and further
-                            manifest columns
-    /truth                  optional ground-truth tree (groups, datasets, attributes)
-    /provenance             provenance tree
+    /                           attributes format = "anklelab-h5/2", content_sha256 and
+                                sha256_<part> for each part below
+    /session                    the session.toml document (keys as attributes, tables as
+                                groups)
+    /calibration, /walking, /bench
+        manifest/               one 1-D dataset per column, one row per recording, in order:
+                                  file      recording name (UTF-8 text)
+                                  trial     walking: trial label (text); perturbed (int8 0/1),
+                                            direction (text), delay_ms (float64, NaN if none)
+                                  test      bench: test label (text); distance_m (float64)
+                                  extra     walking, bench: further manifest columns, one JSON
+                                            object of text values per row
+                                  layout    which layout_<k> holds the recording's samples
+                                  start, length   its samples: data[:, start:start + length]
+        layout_<k>/             the recordings that share one list of column names:
+                                  columns   the column names (text)
+                                  data      float64, (columns, samples of all its recordings)
+                                            end to end, chunked along samples, fletcher32
+    /truth                      optional ground-truth tree (groups, datasets, attributes)
+    /provenance                 provenance tree
 
-Groups remember creation order (recordings and columns come back in the order written); names
-that contain ``/`` or ``%`` are percent-escaped. No timestamps are stored and keys of trees are
-written sorted, so saving the same session twice gives byte-identical files. Writing goes to a
-temporary file beside the target, renamed into place when complete.
+Integrity: every dataset with data carries HDF5's fletcher32 checksum, and the root attribute
+``sha256_<part>`` is the SHA-256 of that part's content (:mod:`anklelab.data._digest`: values, not
+file bytes); the root's ``content_sha256`` hashes the parts' hashes. The reader verifies all of
+them and reports a mismatch as corruption, naming the file and the part. ``content_sha256``
+therefore pins everything a session holds; :func:`h5_content_hash` returns it.
+
+Trial and test labels are text (an integer label in older files reads as its decimal text);
+the plate type travels in ``/session`` with the rest of ``session.toml``. No timestamps are
+stored and trees are written in sorted order, so saving the same session twice gives
+byte-identical files. The file is built in memory, then written to a temporary file beside the
+target and renamed into place when complete (HDF5 itself cannot fail cleanly on a full disk: it
+reports the error when the file is closed and may crash the interpreter; a plain write raises
+``OSError``). Files of the first layout (``anklelab-h5/1``, :mod:`anklelab.data._hdf5_v1`) are
+still read.
 """
 
 from __future__ import annotations
 
+import hashlib
+import io
+import json
+from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -27,41 +52,34 @@ import h5py
 import numpy as np
 
 from anklelab._atomic import atomic_file
-from anklelab.data._checks import (
-    check_bench_tests,
-    check_recording,
-    check_walking_row,
-    check_walking_trials,
-    info_from_mapping,
-    info_to_mapping,
-    validate_session,
+from anklelab.data._checks import excerpt, info_to_mapping, validate_session
+from anklelab.data._digest import sha256_tree, update, update_array_header
+from anklelab.data._h5safe import H5_ERRORS, check_h5_file, damaged, open_h5
+from anklelab.data._hdf5_v1 import read_v1
+from anklelab.data._hdf5_v2 import (
+    H5_FORMAT,
+    INDEX,
+    MANIFEST,
+    SECTIONS,
+    content_hash,
+    read_v2,
 )
-from anklelab.data._progress import Progress, ticker
-from anklelab.data._tree import (
-    create_group,
-    link_name,
-    read_h5_tree,
-    unlink_name,
-    write_h5_tree,
-)
-from anklelab.data.session import (
-    BENCH_COLUMNS,
-    BENCH_MANIFEST_COLUMNS,
-    WALKING_MANIFEST_COLUMNS,
-    BenchTest,
-    Recording,
-    Session,
-    WalkingTrial,
-    label_text,
-)
+from anklelab.data._progress import Progress
+from anklelab.data._tree import canonical, create_group, write_h5_tree
+from anklelab.data.session import Recording, Session
 from anklelab.errors import SessionFormatError
 
-__all__ = ["H5_FORMAT", "is_hdf5", "read_hdf5", "write_hdf5"]
+__all__ = [
+    "H5_FORMAT",
+    "H5_FORMATS",
+    "h5_content_hash",
+    "is_hdf5",
+    "read_hdf5",
+    "write_hdf5",
+]
 
-H5_FORMAT = "anklelab-h5/1"
-# manifest columns stored as attributes (the file name is the group's name)
-_WALKING_ATTRS = tuple(c for c in WALKING_MANIFEST_COLUMNS if c != "file")
-_BENCH_ATTRS = tuple(c for c in BENCH_MANIFEST_COLUMNS if c != "file")
+H5_FORMATS = ("anklelab-h5/1", H5_FORMAT)
+_CHUNK_SAMPLES = 1 << 16  # 512 KiB of float64 per chunk
 
 
 def is_hdf5(path: str | Path) -> bool:
@@ -72,20 +90,70 @@ def is_hdf5(path: str | Path) -> bool:
 # --- writing ------------------------------------------------------------------------------------
 
 
-def _write_recording(parent: h5py.Group, recording: Recording, attrs: dict[str, Any]) -> None:
-    group = create_group(parent, recording.name)
-    for key, value in attrs.items():
-        group.attrs[key] = value
-    # h5py's low-level calls: ~1.5x faster than create_dataset (measured, 8800 columns)
-    dcpl = h5py.h5p.create(h5py.h5p.DATASET_CREATE)
-    dcpl.set_obj_track_times(False)
-    for name, values in recording.columns.items():
-        data = np.ascontiguousarray(values, dtype=np.float64)
-        space = h5py.h5s.create_simple(data.shape)
-        dataset = h5py.h5d.create(
-            group.id, link_name(name).encode(), h5py.h5t.IEEE_F64LE, space, dcpl=dcpl
-        )
-        dataset.write(h5py.h5s.ALL, h5py.h5s.ALL, data)
+def _write_column(group: h5py.Group, name: str, values: Sequence[str] | np.ndarray) -> None:
+    """One manifest or name column: text as fixed-length UTF-8, numbers as they are."""
+    if isinstance(values, np.ndarray):
+        data = values
+    else:
+        encoded = [v.encode("utf-8") for v in values]
+        data = np.array(encoded, dtype=h5py.string_dtype("utf-8", max([1, *map(len, encoded)])))
+    checked = {"chunks": data.shape, "fletcher32": True} if data.size else {}
+    group.create_dataset(name, data=data, track_times=False, **checked)
+
+
+def _write_layout(group: h5py.Group, columns: tuple[str, ...], recordings: list[Recording]) -> str:
+    """The recordings' columns end to end as one 2-D dataset; returns its SHA-256 (hex)."""
+    total = sum(r.n_samples for r in recordings)
+    _write_column(group, "columns", columns)
+    dataset = group.create_dataset(
+        "data",
+        shape=(len(columns), total),
+        dtype="<f8",
+        chunks=(1, min(total, _CHUNK_SAMPLES)),
+        fletcher32=True,
+        track_times=False,
+    )
+    digest = hashlib.sha256()
+    update(digest, columns)
+    update_array_header(digest, dataset.dtype, dataset.shape)
+    for j, name in enumerate(columns):
+        row = np.concatenate([np.asarray(r.columns[name], dtype="<f8") for r in recordings])
+        dataset[j] = row
+        digest.update(row)
+    return digest.hexdigest()
+
+
+def _write_section(
+    f: h5py.File, name: str, recordings: list[Recording], manifest: dict[str, Any]
+) -> str:
+    """One section (layouts, then the manifest); returns its SHA-256 (hex)."""
+    group = create_group(f, name)
+    layouts: dict[tuple[str, ...], list[int]] = {}
+    for i, recording in enumerate(recordings):
+        layouts.setdefault(tuple(recording.columns), []).append(i)
+    index = {key: np.zeros(len(recordings), dtype=np.int64) for key in INDEX}
+    digests = []
+    for k, (columns, members) in enumerate(layouts.items()):
+        lengths = np.array([recordings[i].n_samples for i in members], dtype=np.int64)
+        index["layout"][members] = k
+        index["start"][members] = np.cumsum(lengths) - lengths
+        index["length"][members] = lengths
+        layout = group.create_group(f"layout_{k}")
+        digests.append(_write_layout(layout, columns, [recordings[i] for i in members]))
+    manifest = {"file": tuple(r.name for r in recordings)} | manifest | index
+    columns = group.create_group("manifest", track_order=True)
+    for key in MANIFEST[name]:
+        _write_column(columns, key, manifest[key])
+    return sha256_tree({"manifest": manifest, "layouts": tuple(digests)})
+
+
+def _write_tree(f: h5py.File, name: str, tree: Any) -> str:
+    write_h5_tree(create_group(f, name), tree)
+    return sha256_tree(canonical(tree))
+
+
+def _extra_json(extra: Any) -> str:
+    return json.dumps(dict(extra), sort_keys=True, ensure_ascii=False)
 
 
 def write_hdf5(
@@ -106,7 +174,7 @@ def write_hdf5(
     overwrite : bool
         Replace an existing file; otherwise raise ``FileExistsError``.
     progress : callable, optional
-        Called as ``progress(done, total)`` after each recording is written.
+        Called as ``progress(done, total)`` after each section is written, counting recordings.
 
     Returns
     -------
@@ -114,187 +182,113 @@ def write_hdf5(
         ``path``.
     """
     validate_session(session)
-    tick = ticker(progress, len(session.calibration) + len(session.walking) + len(session.bench))
+    n = {"calibration": len(session.calibration), "walking": len(session.walking)}
+    total = n["calibration"] + n["walking"] + len(session.bench)
     target = Path(path)
-    with (
-        atomic_file(target, overwrite=overwrite) as tmp,
-        h5py.File(tmp, "w", track_order=True) as f,
-    ):
+    walking, bench = session.walking, session.bench
+    manifests = {
+        "calibration": {},
+        "walking": {
+            "trial": tuple(str(t.trial) for t in walking),
+            "perturbed": np.array([t.perturbed for t in walking], dtype=np.int8),
+            "direction": tuple(t.direction for t in walking),
+            "delay_ms": np.array([t.delay_ms for t in walking], dtype=np.float64),
+            "extra": tuple(_extra_json(t.extra) for t in walking),
+        },
+        "bench": {
+            "test": tuple(str(b.test) for b in bench),
+            "distance_m": np.array([b.distance_m for b in bench], dtype=np.float64),
+            "extra": tuple(_extra_json(b.extra) for b in bench),
+        },
+    }
+    recordings = {
+        "calibration": list(session.calibration),
+        "walking": [t.recording for t in walking],
+        "bench": [b.recording for b in bench],
+    }
+    image = io.BytesIO()  # HDF5 cannot fail cleanly on a full disk: it writes to memory
+    with h5py.File(image, "w", track_order=True) as f:
         f.attrs["format"] = H5_FORMAT
-        write_h5_tree(create_group(f, "session"), info_to_mapping(session.info))
-        group = create_group(f, "calibration")
-        for recording in session.calibration:
-            _write_recording(group, recording, {})
-            tick()
-        group = create_group(f, "walking")
-        for t in session.walking:
-            known = {
-                "trial": t.trial,
-                "perturbed": np.bool_(t.perturbed),
-                "direction": t.direction,
-                "delay_ms": np.float64(t.delay_ms),
-            }
-            _write_recording(group, t.recording, dict(t.extra) | known)
-            tick()
-        group = create_group(f, "bench")
-        for b in session.bench:
-            known = {"test": b.test, "distance_m": np.float64(b.distance_m)}
-            _write_recording(group, b.recording, dict(b.extra) | known)
-            tick()
-        if session.truth is not None:
-            write_h5_tree(create_group(f, "truth"), session.truth)
-        write_h5_tree(create_group(f, "provenance"), session.provenance)
+        parts: dict[str, str | None] = {
+            "session": _write_tree(f, "session", info_to_mapping(session.info))
+        }
+        done = 0
+        for name in SECTIONS:
+            parts[name] = _write_section(f, name, recordings[name], manifests[name])
+            done += len(recordings[name])
+            if progress is not None:
+                progress(done, total)
+        parts["truth"] = None if session.truth is None else _write_tree(f, "truth", session.truth)
+        parts["provenance"] = _write_tree(f, "provenance", session.provenance)
+        for name, digest in parts.items():
+            if digest is not None:
+                f.attrs[f"sha256_{name}"] = digest
+        f.attrs["content_sha256"] = content_hash(parts)
+    with atomic_file(target, overwrite=overwrite) as tmp:
+        tmp.write_bytes(image.getbuffer())
     return target
 
 
 # --- reading ------------------------------------------------------------------------------------
 
 
-def _columns(where: str, group: h5py.Group) -> dict[str, np.ndarray]:
-    """Every dataset of a recording's group as a float64 column (low-level reads, ~3x faster
-    than h5py's ``dataset[()]`` for many small columns)."""
-    columns = {}
-    for link in group:
-        try:
-            dataset = h5py.h5d.open(group.id, link.encode())
-        except KeyError:
-            dataset = None
-        numeric = (h5py.h5t.FLOAT, h5py.h5t.INTEGER)
-        if (
-            dataset is None
-            or len(dataset.shape) != 1
-            or dataset.get_type().get_class() not in numeric
-        ):
-            raise SessionFormatError(
-                f"{where}/{link}: expected a 1-D numeric dataset (one column), got {group[link]!r}"
-            )
-        values = np.empty(dataset.shape, dtype=np.float64)
-        dataset.read(h5py.h5s.ALL, h5py.h5s.ALL, values)
-        columns[unlink_name(link)] = values
-    return columns
-
-
-def _label(where: str, attrs: dict[str, Any], key: str) -> str:
-    """A trial or test label: text, or an integer (files written before labels were text)."""
-    if key not in attrs:
-        raise SessionFormatError(f"{where}: attribute {key!r} is missing")
-    return label_text(attrs[key], f"{where}: attribute {key!r}")
-
-
-def _attr(where: str, attrs: dict[str, Any], key: str, kind: type) -> Any:
-    if key not in attrs:
-        raise SessionFormatError(f"{where}: attribute {key!r} is missing")
-    value = attrs[key]
-    ok = {
-        int: isinstance(value, np.integer),
-        bool: isinstance(value, np.bool_ | bool),
-        str: isinstance(value, str),
-        float: isinstance(value, np.floating | float),
-    }[kind]
-    if not ok:
+def _format(f: h5py.File, path: Path) -> str:
+    fmt = f.attrs.get("format")
+    if isinstance(fmt, bytes):
+        fmt = fmt.decode("utf-8", "replace")
+    if fmt not in H5_FORMATS:
+        known = isinstance(fmt, str) and fmt.startswith("anklelab-h5/")
         raise SessionFormatError(
-            f"{where}: attribute {key!r} = {value!r}; expected a {kind.__name__}"
+            f"{path}: attribute 'format' = {excerpt(fmt)}; expected {H5_FORMAT!r} (or the older "
+            f"{H5_FORMATS[0]!r})"
+            + (
+                " (written by a different anklelab version)"
+                if known
+                else " (not an anklelab session file)"
+            )
         )
-    return kind(value)
-
-
-def _extra(attrs: dict[str, Any], known: tuple[str, ...]) -> dict[str, str]:
-    return {k: str(v) for k, v in attrs.items() if k not in known}
-
-
-def _section(f: h5py.File, name: str) -> h5py.Group | None:
-    item = f.get(name)
-    if item is not None and not isinstance(item, h5py.Group):
-        raise SessionFormatError(f"{f.filename}:/{name}: expected a group")
-    return item
+    return fmt
 
 
 def read_hdf5(path: str | Path, *, progress: Progress | None = None) -> Session:
-    """Read and validate a native HDF5 session file.
+    """Read, verify and validate a native HDF5 session file (``anklelab-h5/2`` or ``/1``).
 
     ``progress``, if given, is called as ``progress(done, total)`` after each recording.
 
     Raises
     ------
     SessionFormatError
-        Not an anklelab HDF5 file, an unsupported format version, or any problem the
-        directory reader would reject (naming the HDF5 path, column and 1-based sample).
+        Not an anklelab HDF5 file, an unsupported format version, a link or an oversized
+        dataset (see :func:`~anklelab.data._h5safe.check_h5_file`), corruption (a checksum or
+        content hash that does not match, naming the part), or any problem the directory
+        reader would reject (naming the HDF5 path, column and 1-based sample).
     """
     path = Path(path)
     try:
-        f = h5py.File(path, "r")
-    except OSError as exc:
-        raise SessionFormatError(f"{path}: cannot open as HDF5 ({exc})") from None
-    with f:
-        fmt = f.attrs.get("format")
-        if isinstance(fmt, bytes):
-            fmt = fmt.decode("utf-8", "replace")
-        if fmt != H5_FORMAT:
-            known = isinstance(fmt, str) and fmt.startswith("anklelab-h5/")
-            raise SessionFormatError(
-                f"{path}: attribute 'format' = {fmt!r}; expected {H5_FORMAT!r}"
-                + (
-                    " (written by a different anklelab version)"
-                    if known
-                    else " (not an anklelab session file)"
-                )
+        with open_h5(path, "an anklelab HDF5 session") as f:
+            fmt = _format(f, path)
+            check_h5_file(f, path)
+            reader: Callable[[h5py.File, Path, Progress | None], Session] = (
+                read_v2 if fmt == H5_FORMAT else read_v1
             )
-        if not isinstance(f.get("session"), h5py.Group):
-            raise SessionFormatError(f"{path}:/session: group is missing")
-        info = info_from_mapping(read_h5_tree(f["session"]), str(path), "/session/")
-        fs = info.sample_rate_hz
-        sections = {name: _section(f, name) for name in ("calibration", "walking", "bench")}
-        tick = ticker(progress, sum(len(g) for g in sections.values() if g is not None))
+            return reader(f, path, progress)
+    except SessionFormatError:
+        raise
+    except H5_ERRORS as exc:  # HDF5 reports damage as any of these
+        raise damaged(path, exc) from None
 
-        def recording(section: str, link: str, group: h5py.Group, required: tuple[str, ...]):
-            where = f"{path}:/{section}/{link}"
-            columns = _columns(where, group)
-            check_recording(where, columns, required, fs, nullable=info.force_plate.nullable)
-            tick()
-            return where, Recording(unlink_name(link), columns)
 
-        calibration = []
-        if (section := sections["calibration"]) is not None:
-            for link, group in section.items():
-                calibration.append(
-                    recording("calibration", link, group, info.calibration_columns)[1]
-                )
-        walking = []
-        if (section := sections["walking"]) is not None:
-            for link, group in section.items():
-                where, rec = recording("walking", link, group, info.walking_columns)
-                attrs = dict(group.attrs)
-                trial = WalkingTrial(
-                    trial=_label(where, attrs, "trial"),
-                    recording=rec,
-                    perturbed=_attr(where, attrs, "perturbed", bool),
-                    direction=_attr(where, attrs, "direction", str),  # type: ignore[arg-type]
-                    delay_ms=_attr(where, attrs, "delay_ms", float),
-                    extra=_extra(attrs, _WALKING_ATTRS),
-                )
-                check_walking_row(where, trial.perturbed, trial.direction, trial.delay_ms)
-                walking.append((trial, f"/walking/{link}"))
-            check_walking_trials(str(path), walking)
-        bench = []
-        if (section := sections["bench"]) is not None:
-            for link, group in section.items():
-                where, rec = recording("bench", link, group, BENCH_COLUMNS)
-                attrs = dict(group.attrs)
-                test = BenchTest(
-                    test=_label(where, attrs, "test"),
-                    recording=rec,
-                    distance_m=_attr(where, attrs, "distance_m", float),
-                    extra=_extra(attrs, _BENCH_ATTRS),
-                )
-                bench.append((test, f"/bench/{link}"))
-            check_bench_tests(str(path), bench)
-        truth = read_h5_tree(f["truth"]) if "truth" in f else None
-        provenance = read_h5_tree(f["provenance"]) if "provenance" in f else {}
-    return Session(
-        info=info,
-        calibration=tuple(calibration),
-        walking=tuple(t for t, _ in walking),
-        bench=tuple(b for b, _ in bench),
-        truth=truth,
-        provenance=provenance,
-    )
+def h5_content_hash(path: str | Path) -> str | None:
+    """The ``content_sha256`` an ``anklelab-h5/2`` file stores (verified whenever the session is
+    read), or ``None`` for any other HDF5 file (the older layout, or not a session)."""
+    path = Path(path)
+    try:
+        with open_h5(path, "an anklelab HDF5 session") as f:
+            if f.attrs.get("format") != H5_FORMAT:
+                return None
+            value = f.attrs.get("content_sha256")
+    except H5_ERRORS as exc:
+        raise damaged(path, exc) from None
+    if not (isinstance(value, str) and len(value) == 64):
+        raise SessionFormatError(f"{path}: attribute 'content_sha256' is missing or malformed")
+    return value

@@ -50,8 +50,10 @@ from anklelab.data._checks import (
     check_recording,
     check_walking_row,
     check_walking_trials,
+    excerpt,
     info_from_mapping,
 )
+from anklelab.data._h5safe import H5_ERRORS, check_h5_file, damaged, open_h5
 from anklelab.data._progress import Progress, ticker
 from anklelab.data.session import (
     BENCH_COLUMNS,
@@ -75,13 +77,39 @@ def _decode(value: Any) -> str:
     return value.decode("ascii", "replace") if isinstance(value, bytes) else str(value)
 
 
-def _h5_value(item: h5py.Group | h5py.Dataset, f: h5py.File) -> Any:
-    """A MATLAB v7.3 object as the value :func:`scipy.io.loadmat` would give (simplify_cells)."""
+def _h5_value(
+    item: h5py.Group | h5py.Dataset, f: h5py.File, where: str, enclosing: frozenset[int]
+) -> Any:
+    """A MATLAB v7.3 object as the value :func:`scipy.io.loadmat` would give (simplify_cells).
+
+    ``where`` names the value in messages (``session.walking(3)``); ``enclosing`` holds the
+    addresses of the objects around it, so that a reference back to one of them (a cycle) is
+    refused rather than followed forever.
+    """
+    address = h5py.h5o.get_info(item.id).addr
+    if address in enclosing:
+        raise SessionFormatError(
+            f"{where}: refers back to a value that contains it (a reference cycle); expected a "
+            "tree of values"
+        )
+    inside = enclosing | {address}
+
+    def follow(ref: h5py.Reference, at: str) -> Any:
+        if not ref:
+            raise SessionFormatError(f"{at}: a null reference; expected a value")
+        try:
+            target = f[ref]
+        except H5_ERRORS:
+            raise SessionFormatError(
+                f"{at}: a dangling reference (the object it names does not exist)"
+            ) from None
+        return _h5_value(target, f, at, inside)
+
     cls = _decode(item.attrs.get("MATLAB_class", b""))
     if isinstance(item, h5py.Group):
         order = item.attrs.get("MATLAB_fields")
         names = (
-            [b"".join(np.asarray(field).ravel()).decode("ascii") for field in order]
+            [b"".join(np.asarray(field).ravel()).decode("ascii", "replace") for field in order]
             if order is not None
             else [k for k in item if not k.startswith("#")]
         )
@@ -93,18 +121,24 @@ def _h5_value(item: h5py.Group | h5py.Dataset, f: h5py.File) -> Any:
             for m in members.values()
         )
         if not is_array:
-            return {name: _h5_value(m, f) for name, m in members.items()}
+            return {name: _h5_value(m, f, f"{where}.{name}", inside) for name, m in members.items()}
         refs = {name: m[()].ravel(order="F") for name, m in members.items()}
-        count = len(next(iter(refs.values())))
-        elements = [{name: _h5_value(f[r[i]], f) for name, r in refs.items()} for i in range(count)]
+        count = min(map(len, refs.values()))
+        elements = [
+            {name: follow(r[i], f"{where}({i + 1}).{name}") for name, r in refs.items()}
+            for i in range(count)
+        ]
         return elements[0] if count == 1 else elements
-    if item.attrs.get("MATLAB_empty", 0):
+    if np.asarray(item.attrs.get("MATLAB_empty", 0)).any():
         return "" if cls == "char" else np.empty(0)
     data = np.asarray(item[()]).T  # HDF5 stores MATLAB arrays transposed
     if cls == "char":
-        return "".join(map(chr, data.ravel()))
+        try:
+            return "".join(map(chr, data.ravel()))
+        except (TypeError, ValueError, OverflowError):
+            raise SessionFormatError(f"{where}: not valid character codes") from None
     if cls == "cell":
-        cells = [_h5_value(f[ref], f) for ref in data.ravel()]
+        cells = [follow(ref, f"{where}{{{i + 1}}}") for i, ref in enumerate(data.ravel())]
         return cells[0] if len(cells) == 1 else cells
     if cls == "logical":
         data = data.astype(bool)
@@ -112,17 +146,51 @@ def _h5_value(item: h5py.Group | h5py.Dataset, f: h5py.File) -> Any:
     return data.item() if data.ndim == 0 else data
 
 
-def _load(path: Path) -> dict[str, Any]:
-    """The top-level variables of a MAT file as plain values."""
-    if h5py.is_hdf5(str(path)):
-        with h5py.File(path, "r") as f:
-            return {k: _h5_value(f[k], f) for k in f if not k.startswith("#")}
+def _load(path: Path, only: str | None = None) -> dict[str, Any]:
+    """The top-level variables of a MAT file as plain values; with ``only``, just that one (no
+    other variable is read).
+
+    Raises
+    ------
+    SessionFormatError
+        When the file cannot be read (a v7.3 file: any link, alias, oversized dataset, reference
+        cycle or damage, see :func:`~anklelab.data._h5safe.check_h5_file`), or has no variable
+        ``only`` (naming the variables it has).
+    """
+    if h5py.is_hdf5(str(path)):  # v7.3
+        try:
+            with open_h5(path, "a MATLAB v7.3 file") as f:
+                check_h5_file(f, path)
+                names = [k for k in f if not k.startswith("#")]
+                _require(path, only, names)
+                return {
+                    k: _h5_value(f[k], f, f"{path}: {k}", frozenset())
+                    for k in ([only] if only else names)
+                }
+        except SessionFormatError:
+            raise
+        except H5_ERRORS as exc:
+            raise damaged(path, exc) from None
+        except RecursionError:
+            raise SessionFormatError(f"{path}: values nested too deeply") from None
     import scipy.io  # only for pre-v7.3 files; slow to import
 
     try:
-        return scipy.io.loadmat(str(path), simplify_cells=True)
+        names = [name for name, _, _ in scipy.io.whosmat(str(path))]
+        _require(path, only, names)
+        return scipy.io.loadmat(str(path), simplify_cells=True, variable_names=only and [only])
+    except SessionFormatError:
+        raise
     except Exception as exc:  # scipy raises many types for a file that is not a MAT file
-        raise SessionFormatError(f"{path}: cannot read as a MAT file ({exc})") from None
+        raise SessionFormatError(
+            f"{path}: cannot read as a MAT file ({excerpt(str(exc), 100, quote=False)})"
+        ) from None
+
+
+def _require(path: Path, name: str | None, names: list[str]) -> None:
+    if name is not None and name not in names:
+        found = ", ".join(excerpt(k, 40, quote=False) for k in names) or "none"
+        raise SessionFormatError(f"{path}: no variable {name!r} (found: {found})")
 
 
 # --- building the session -----------------------------------------------------------------------
@@ -152,7 +220,7 @@ def _scalar(value: Any, where: str, kind: Callable[[Any], Any], expected: str) -
             return kind(number)
         except ValueError:
             pass
-    raise SessionFormatError(f"{where}: expected {expected}, got {value!r}")
+    raise SessionFormatError(f"{where}: expected {expected}, got {excerpt(value)}")
 
 
 def _label(value: Any, where: str) -> str:
@@ -189,7 +257,7 @@ def _delay(value: Any, where: str) -> float:
 
 def _text(value: Any, where: str) -> str:
     if not isinstance(value, str):
-        raise SessionFormatError(f"{where}: expected text (a char array), got {value!r}")
+        raise SessionFormatError(f"{where}: expected text (a char array), got {excerpt(value)}")
     return value
 
 
@@ -247,11 +315,7 @@ def read_matlab(path: str | Path, *, progress: Progress | None = None) -> Sessio
     path = Path(path)
     if not path.is_file():
         raise SessionFormatError(f"{path}: file not found")
-    variables = _load(path)
-    if "session" not in variables:
-        found = ", ".join(k for k in variables if not k.startswith("__")) or "none"
-        raise SessionFormatError(f"{path}: no variable 'session' (found: {found})")
-    root = variables["session"]
+    root = _load(path, "session")["session"]
     if not isinstance(root, dict):
         raise SessionFormatError(f"{path}: session: expected a scalar struct")
     meta = {k: v for k, v in root.items() if k not in _SECTIONS}
@@ -312,4 +376,5 @@ def read_matlab(path: str | Path, *, progress: Progress | None = None) -> Sessio
         calibration=tuple(calibration),
         walking=tuple(t for t, _ in walking),
         bench=tuple(b for b, _ in bench),
+        source=str(path),
     )

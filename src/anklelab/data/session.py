@@ -17,6 +17,7 @@ from typing import Any, Literal
 import numpy as np
 from numpy.typing import NDArray
 
+from anklelab.data._text import excerpt, plain_text
 from anklelab.errors import SessionFormatError
 from anklelab.forceplate import CHANNELS, ForcePlate
 
@@ -51,8 +52,8 @@ Direction = Literal["dorsi", "plantar", "none"]
 
 
 def label_text(value: object, where: str = "label") -> str:
-    """A trial or bench-test label as text: any non-empty text without surrounding spaces;
-    an integer becomes its decimal text (``12`` -> ``"12"``).
+    """A trial or bench-test label as text: any non-empty text without surrounding spaces,
+    line breaks or NUL characters; an integer becomes its decimal text (``12`` -> ``"12"``).
 
     Raises
     ------
@@ -66,11 +67,11 @@ def label_text(value: object, where: str = "label") -> str:
     """
     if isinstance(value, int | np.integer) and not isinstance(value, bool | np.bool_):
         return str(int(value))
-    if isinstance(value, str) and value and value == value.strip():
-        return value
+    if plain_text(value):
+        return value  # type: ignore[return-value]
     raise SessionFormatError(
-        f"{where}: got {value!r}; expected a label (non-empty text without surrounding spaces, "
-        "or an integer)"
+        f"{where}: got {excerpt(value)}; expected a label (non-empty text without surrounding "
+        "spaces, line breaks or NUL characters, or an integer)"
     )
 
 
@@ -209,6 +210,11 @@ class Session:
         (the twin's parameters, true time courses and reference values).
     provenance : mapping
         ``anklelab_version``, ``settings``, ``source_sha256`` and the like.
+    source : str
+        Where the session was read from, as the user named it (``"s"``, ``"s.h5"``), for
+        messages that name its files (``f"{session.source}/walking/trials.csv"``); empty for a
+        session built in memory. Not part of the session's content (equality and
+        :func:`~anklelab.data.diff_sessions` ignore it).
     """
 
     info: SessionInfo
@@ -217,3 +223,4 @@ class Session:
     bench: tuple[BenchTest, ...] = ()
     truth: Mapping[str, Any] | None = None
     provenance: Mapping[str, Any] = field(default_factory=dict)
+    source: str = field(default="", compare=False)

@@ -16,10 +16,11 @@ from typing import Any, Literal
 
 from anklelab._version import __version__
 from anklelab.data._checks import info_to_mapping
+from anklelab.data._files import file_kind
 from anklelab.data._progress import Progress
 from anklelab.data._tree import canonical, tree_differences
-from anklelab.data.directory import read_directory, write_directory
-from anklelab.data.hdf5 import is_hdf5, read_hdf5, write_hdf5
+from anklelab.data.directory import _read_directory, directory_hash, write_directory
+from anklelab.data.hdf5 import h5_content_hash, is_hdf5, read_hdf5, write_hdf5
 from anklelab.data.matlab import read_matlab
 from anklelab.data.session import Recording, Session
 from anklelab.errors import ParameterError, SessionFormatError
@@ -43,6 +44,11 @@ def session_kind(path: str | Path) -> SessionKind:
         return "dir"
     if not path.exists():
         raise SessionFormatError(f"{path}: no such file or directory")
+    if not path.is_file():
+        raise SessionFormatError(
+            f"{path}: is {file_kind(path)}, not a regular file; expected a session directory, "
+            "an anklelab .h5 file or a MATLAB .mat file"
+        )
     if path.suffix.lower() == ".mat":
         return "mat"
     if is_hdf5(path):
@@ -52,43 +58,40 @@ def session_kind(path: str | Path) -> SessionKind:
     )
 
 
-def _file_digest(path: Path) -> bytes:
+def _file_digest(path: Path) -> str:
     digest = hashlib.sha256()
     with path.open("rb") as f:
         while chunk := f.read(_CHUNK):
             digest.update(chunk)
-    return digest.digest()
+    return digest.hexdigest()
 
 
 def session_hash(path: str | Path) -> str:
-    """SHA-256 (hex) of a session's content, for provenance.
+    """SHA-256 (hex) of everything a session read takes in, for provenance.
 
-    A file hashes its bytes. A directory hashes, in sorted order, every regular file below it
-    (hidden names starting with ``.`` excluded): its relative POSIX path and the SHA-256 of
-    its bytes, so renaming, adding or changing any file changes the hash.
+    - A session directory: every file :func:`load_session` reads, in reading order, each as its
+      relative path and the SHA-256 of its bytes (:func:`~anklelab.data.directory.directory_hash`);
+      files the reader ignores do not count.
+    - A native ``anklelab-h5/2`` file: its ``content_sha256``, the SHA-256 over every value it
+      stores (metadata, manifests, channel data, truth, provenance), which :func:`load_session`
+      verifies on every read.
+    - Any other file (MATLAB, ``anklelab-h5/1``, a C3D file): the SHA-256 of its bytes.
 
     Examples
     --------
     >>> import tempfile
-    >>> with tempfile.NamedTemporaryFile() as f:
+    >>> with tempfile.NamedTemporaryFile(suffix=".mat") as f:
     ...     session_hash(f.name)[:12]
     'e3b0c44298fc'
     """
     path = Path(path)
-    if path.is_file():
-        return _file_digest(path).hex()
-    if not path.is_dir():
-        raise SessionFormatError(f"{path}: no such file or directory")
-    digest = hashlib.sha256()
-    files = (
-        p
-        for p in path.rglob("*")
-        if p.is_file() and not any(part.startswith(".") for part in p.relative_to(path).parts)
-    )
-    for file in sorted(files, key=lambda p: p.relative_to(path).as_posix()):
-        digest.update(file.relative_to(path).as_posix().encode() + b"\0")
-        digest.update(_file_digest(file))
-    return digest.hexdigest()
+    if path.is_dir():
+        return directory_hash(path)
+    if not path.is_file():
+        session_kind(path)  # names what the path is instead
+    if is_hdf5(path) and (content := h5_content_hash(path)) is not None:
+        return content
+    return _file_digest(path)
 
 
 def load_session(path: str | Path, *, progress: Progress | None = None) -> Session:
@@ -115,11 +118,13 @@ def load_session(path: str | Path, *, progress: Progress | None = None) -> Sessi
     kind = session_kind(path)
     if kind == "h5":
         return read_hdf5(path, progress=progress)
-    reader = read_directory if kind == "dir" else read_matlab
-    session = reader(path, progress=progress)
+    if kind == "dir":
+        session, digest = _read_directory(path, progress)
+    else:
+        session, digest = read_matlab(path, progress=progress), _file_digest(Path(path))
     provenance = dict(session.provenance)
     provenance.setdefault("anklelab_version", __version__)
-    provenance["source_sha256"] = session_hash(path)
+    provenance["source_sha256"] = digest
     provenance["import"] = {
         "anklelab_version": __version__,
         "importer": {"dir": "csv-directory", "mat": "matlab"}[kind],

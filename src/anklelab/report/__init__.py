@@ -4,53 +4,34 @@ Importing this package does not import matplotlib: each figure function imports 
 backend) when it draws.
 """
 
-from anklelab.report.figures_capstan import (
-    chirp_tracking_figure,
-    envelope_figure,
-    friction_figures,
-    observer_figure,
-    render_figure,
-    scene_figure,
-    step_figure,
-    teleop_figure,
-    zwidth_figure,
-)
-from anklelab.report.figures_impedance import impedance_figure
-from anklelab.report.figures_walking import (
-    filters_figure,
-    model_fit_figure,
-    save_walking_figures,
-    stance_figure,
-    walking_figures,
-)
-from anklelab.report.html import Figure, Section, Table, figure_png, render_html, write_report
-from anklelab.report.paper_values import PAPER_000, PAPER_001, PaperValue
-from anklelab.report.sections import results_report
+from anklelab._lazy import lazy_exports
 
-__all__ = [
-    "PAPER_000",
-    "PAPER_001",
-    "Figure",
-    "PaperValue",
-    "Section",
-    "Table",
-    "chirp_tracking_figure",
-    "envelope_figure",
-    "figure_png",
-    "filters_figure",
-    "friction_figures",
-    "impedance_figure",
-    "model_fit_figure",
-    "observer_figure",
-    "render_figure",
-    "render_html",
-    "results_report",
-    "save_walking_figures",
-    "scene_figure",
-    "stance_figure",
-    "step_figure",
-    "teleop_figure",
-    "walking_figures",
-    "write_report",
-    "zwidth_figure",
-]
+_EXPORTS = {
+    "chirp_tracking_figure": "figures_capstan",
+    "envelope_figure": "figures_capstan",
+    "friction_figures": "figures_capstan",
+    "observer_figure": "figures_capstan",
+    "render_figure": "figures_capstan",
+    "scene_figure": "figures_capstan",
+    "step_figure": "figures_capstan",
+    "teleop_figure": "figures_capstan",
+    "zwidth_figure": "figures_capstan",
+    "impedance_figure": "figures_impedance",
+    "filters_figure": "figures_walking",
+    "model_fit_figure": "figures_walking",
+    "save_walking_figures": "figures_walking",
+    "stance_figure": "figures_walking",
+    "walking_figures": "figures_walking",
+    "Figure": "html",
+    "Section": "html",
+    "Table": "html",
+    "figure_png": "html",
+    "render_html": "html",
+    "write_report": "html",
+    "PAPER_000": "paper_values",
+    "PAPER_001": "paper_values",
+    "PaperValue": "paper_values",
+    "results_report": "sections",
+}
+__all__ = sorted(_EXPORTS)
+__getattr__, __dir__ = lazy_exports(__name__, _EXPORTS)

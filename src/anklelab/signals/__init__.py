@@ -1,23 +1,21 @@
 """Signal processing: zero-phase filters, derivatives, event detection, trials (epochs), VAF."""
 
-from anklelab.metrics import vaf
-from anklelab.signals.derivatives import derivative, kinematics
-from anklelab.signals.epochs import Trials, bootstrap_weights, epoch, stack_recordings
-from anklelab.signals.events import NOT_FOUND, Onsets, heel_contact, perturbation_onset
-from anklelab.signals.filters import lowpass, lowpass_min_samples
+from anklelab._lazy import lazy_exports
 
-__all__ = [
-    "NOT_FOUND",
-    "Onsets",
-    "Trials",
-    "bootstrap_weights",
-    "derivative",
-    "epoch",
-    "heel_contact",
-    "kinematics",
-    "lowpass",
-    "lowpass_min_samples",
-    "perturbation_onset",
-    "stack_recordings",
-    "vaf",
-]
+_EXPORTS = {
+    "derivative": "derivatives",
+    "kinematics": "derivatives",
+    "Trials": "epochs",
+    "bootstrap_weights": "epochs",
+    "epoch": "epochs",
+    "stack_recordings": "epochs",
+    "NOT_FOUND": "events",
+    "Onsets": "events",
+    "heel_contact": "events",
+    "perturbation_onset": "events",
+    "lowpass": "filters",
+    "lowpass_min_samples": "filters",
+    "vaf": "anklelab.metrics",
+}
+__all__ = sorted(_EXPORTS)
+__getattr__, __dir__ = lazy_exports(__name__, _EXPORTS)

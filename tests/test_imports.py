@@ -1,0 +1,95 @@
+"""Each command and package loads only what it uses (package names load on first use)."""
+
+import json
+import subprocess
+import sys
+
+import pytest
+
+from anklelab.data import save_session
+from anklelab.data._synthetic import random_session
+
+TWINS = ["numba", "llvmlite", "anklelab.sim", "anklelab.control", "anklelab.experiments"]
+LAB_FORMATS = ["ezc3d", "anklelab.data.c3d", "anklelab.data.c3d_import", "anklelab.data.matlab_map"]
+HEAVY = [*TWINS, *LAB_FORMATS, "scipy", "h5py", "matplotlib", "pyarrow"]
+
+
+def loaded(code, *argv):
+    """The modules loaded after running ``code`` (which may run the CLI with ``argv``)."""
+    script = (
+        "import json, sys\n"
+        f"sys.argv = ['anklelab', *{list(map(str, argv))!r}]\n"
+        "try:\n"
+        f"    {code}\n"
+        "except SystemExit:\n"
+        "    pass\n"
+        "sys.stderr.write('\\nMODULES ' + json.dumps(sorted(sys.modules)))\n"
+    )
+    proc = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True)
+    assert "MODULES " in proc.stderr, proc.stderr
+    return set(json.loads(proc.stderr.rsplit("MODULES ", 1)[1]))
+
+
+def test_importing_anklelab_and_its_packages_loads_nothing_heavy():
+    modules = loaded(
+        "import anklelab, anklelab.data, anklelab.ident, anklelab.signals, anklelab.report"
+    )
+    assert not modules & {*HEAVY, "numpy", "pydantic"}
+
+
+def test_public_names_still_import_from_their_packages():
+    from anklelab import PlateGeometry, __version__, load_platform
+    from anklelab.data import load_session
+    from anklelab.ident import FrictionIdentifier, PlatformFilters
+    from anklelab.ident.friction import FrictionIdentifier as defined
+    from anklelab.report import save_walking_figures
+    from anklelab.signals import lowpass
+
+    assert FrictionIdentifier is defined and callable(load_session) and __version__
+    assert all(callable(f) for f in (PlateGeometry, load_platform, PlatformFilters))
+    assert callable(save_walking_figures) and callable(lowpass)
+    with pytest.raises(AttributeError, match="has no attribute 'nothing'"):
+        import anklelab.ident
+
+        anklelab.ident.nothing  # noqa: B018
+
+
+def test_help_loads_no_implementation():
+    assert not loaded("from anklelab.cli import run; run()", "--help") & {
+        *HEAVY,
+        "anklelab.data",
+        "anklelab.ident",
+        "anklelab.pipelines",
+    }
+
+
+@pytest.fixture(scope="module")
+def sessions(tmp_path_factory):
+    root = tmp_path_factory.mktemp("imports")
+    session = random_session()
+    return save_session(session, root / "s", format="dir"), save_session(session, root / "s.h5")
+
+
+def test_session_info_and_import_load_no_analysis_or_twin(sessions, tmp_path):
+    directory, h5 = sessions
+    for argv in (
+        ("session", "info", directory),
+        ("session", "info", h5),
+        ("import", directory, "--out", tmp_path / "x.h5"),
+    ):
+        modules = loaded("from anklelab.cli import run; run()", *argv)
+        assert not modules & {*TWINS, *LAB_FORMATS, "scipy", "matplotlib", "anklelab.ident"}, argv
+    assert (tmp_path / "x.h5").exists()
+
+
+def test_the_analysis_of_recorded_data_never_loads_numba_or_the_twins(sessions):
+    _, h5 = sessions
+    # the analysis path, as `anklelab analyze` imports it (the noise session itself is
+    # rejected by the analysis; what matters is what the command loaded)
+    modules = loaded(
+        "from anklelab.cli import run; run()", "analyze", h5, "--out", h5.with_name("out")
+    )
+    assert "anklelab.pipelines.walking" in modules
+    assert not modules & {*TWINS, *LAB_FORMATS, "anklelab.ident.friction", "matplotlib"}
+    figures = loaded("import anklelab.report.figures_walking, anklelab.pipelines.walking")
+    assert not figures & {*TWINS, "anklelab.ident.friction"}
