@@ -23,7 +23,11 @@ from tests.c3d_files import write_c3d
 from tests.lab_twin import small_twin
 
 MAP = Path(__file__).parents[1] / "examples" / "maps" / "c3d_kistler.toml"
-SETTINGS = WalkingSettings(bootstrap_reps=20)
+# paper 000's analysis for both: the comparison is of the data. With a few trials per point the
+# automatic model choice can fall either way on near-equal evidence, and the covariate adjustment,
+# learnt from a handful of unperturbed trials, turns the formats' small differences (a COP left
+# empty at low force) into up to 0.4 % of stiffness at one point (measured, seed of lab_twin)
+SETTINGS = WalkingSettings(bootstrap_reps=20, stiffness_model="constant", covariate_adjustment=False)
 DEG = 180.0 / math.pi
 LABEL = {"dorsi": "d", "plantar": "p", "none": "u"}
 

@@ -15,7 +15,11 @@ from anklelab.forceplate import CHANNELS, GrfCopPlate, SixAxisPlate, resultants
 from anklelab.pipelines import WalkingSettings, analyze_walking
 from tests.lab_twin import small_twin
 
-SETTINGS = WalkingSettings(bootstrap_reps=20)
+# paper 000's analysis for both: the comparison is of the data. With a few trials per point the
+# automatic model choice can fall either way on near-equal evidence, and the covariate adjustment,
+# learnt from a handful of unperturbed trials, turns the formats' small differences (a COP left
+# empty at low force) into up to 0.4 % of stiffness at one point (measured, seed of lab_twin)
+SETTINGS = WalkingSettings(bootstrap_reps=20, stiffness_model="constant", covariate_adjustment=False)
 
 
 @pytest.fixture(scope="module")
