@@ -289,21 +289,7 @@ ANALYSIS_CASES = {
 }
 
 
-KNOWN_MISSES = {
-    "random": "seed 0 draws a soft human-like ankle (140 N·m/rad at plantar/350) that reads 6.5 % "
-    "low, outside its interval + 3 % (issue 9, open)",
-}
-
-
-@pytest.mark.parametrize(
-    "kind",
-    [
-        pytest.param(k, marks=pytest.mark.xfail(strict=True, reason=KNOWN_MISSES[k]))
-        if k in KNOWN_MISSES
-        else k
-        for k in sorted(ANALYSIS_CASES)
-    ],
-)
+@pytest.mark.parametrize("kind", sorted(ANALYSIS_CASES))
 def test_walking_analysis_lands_near_the_truth(kind):
     from anklelab.pipelines import WalkingSettings, analyze_walking
 
