@@ -27,7 +27,9 @@ MAP = Path(__file__).parents[1] / "examples" / "maps" / "c3d_kistler.toml"
 # automatic model choice can fall either way on near-equal evidence, and the covariate adjustment,
 # learnt from a handful of unperturbed trials, turns the formats' small differences (a COP left
 # empty at low force) into up to 0.4 % of stiffness at one point (measured, seed of lab_twin)
-SETTINGS = WalkingSettings(bootstrap_reps=20, stiffness_model="constant", covariate_adjustment=False)
+SETTINGS = WalkingSettings(
+    bootstrap_reps=20, stiffness_model="constant", covariate_adjustment=False
+)
 DEG = 180.0 / math.pi
 LABEL = {"dorsi": "d", "plantar": "p", "none": "u"}
 

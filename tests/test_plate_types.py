@@ -19,7 +19,9 @@ from tests.lab_twin import small_twin
 # automatic model choice can fall either way on near-equal evidence, and the covariate adjustment,
 # learnt from a handful of unperturbed trials, turns the formats' small differences (a COP left
 # empty at low force) into up to 0.4 % of stiffness at one point (measured, seed of lab_twin)
-SETTINGS = WalkingSettings(bootstrap_reps=20, stiffness_model="constant", covariate_adjustment=False)
+SETTINGS = WalkingSettings(
+    bootstrap_reps=20, stiffness_model="constant", covariate_adjustment=False
+)
 
 
 @pytest.fixture(scope="module")

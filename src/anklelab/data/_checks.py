@@ -15,7 +15,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from anklelab._params import did_you_mean, found_instead, parameters_from_mapping
+from anklelab._params import found_instead, parameters_from_mapping
 from anklelab.data._text import excerpt, plain_text, storable
 from anklelab.data._tree import canonical
 from anklelab.data.session import (

@@ -1,10 +1,8 @@
-"""Estimators: impulse-response filters, 2nd-order impedance, bench stiffness.
+"""Estimators: impulse-response filters, 2nd-order impedance, bench stiffness, friction.
 
-The capstan friction estimator's names load on first use: it builds on the capstan twin's
-compiled friction model, and analysing walking data must not import numba.
+Every name loads its module on first use: the capstan friction estimator builds on the capstan
+twin's compiled friction model, and analysing walking data must not import numba.
 """
-
-from typing import Any
 
 from anklelab._lazy import lazy_exports
 
