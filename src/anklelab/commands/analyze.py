@@ -5,12 +5,12 @@ from __future__ import annotations
 import csv
 import io
 import json
+import math
 import warnings
 from collections.abc import Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Annotated, Any
 
-import numpy as np
 import typer
 from rich import box
 from rich.console import Console
@@ -59,11 +59,11 @@ def trials_table(session: Session, results: WalkingResults) -> list[dict[str, An
                 "file": trial.recording.name,
                 "perturbed": int(trial.perturbed),
                 "direction": trial.direction,
-                "delay_ms": None if np.isnan(trial.delay_ms) else trial.delay_ms,
+                "delay_ms": None if math.isnan(trial.delay_ms) else trial.delay_ms,
                 "kept": int(not reasons),
                 "heel_contact_s": meta.get("heel_contact_s"),
-                "onset_s": None if i is None or np.isnan(meta["onset_s"]) else meta["onset_s"],
-                "onset_ms": None if i is None or np.isnan(meta["onset_ms"]) else meta["onset_ms"],
+                "onset_s": None if i is None or math.isnan(meta["onset_s"]) else meta["onset_s"],
+                "onset_ms": None if i is None or math.isnan(meta["onset_ms"]) else meta["onset_ms"],
                 "drop_reason": "; ".join(reasons),
             }
         )

@@ -5,7 +5,6 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Annotated
 
-import numpy as np
 import typer
 from rich.console import Console
 from rich.table import Table
@@ -93,7 +92,7 @@ def platform_filters(
     for i, pooled, channels in zip(
         held_out or [settings.calibration_fit_trial], vaf, by_channel, strict=True
     ):
-        worst = int(np.argmin(channels))
+        worst = int(channels.argmin())
         table.add_row(
             session.calibration[i].name,
             f"{pooled:.2f}",
@@ -101,7 +100,7 @@ def platform_filters(
         )
     console = Console()
     console.print(table)
-    console.print(f"mean held-out VAF {np.mean(vaf):.2f} %; filters written to {out}")
+    console.print(f"mean held-out VAF {vaf.mean():.2f} %; filters written to {out}")
 
 
 @app.command("friction")

@@ -10,9 +10,8 @@ import typer
 from rich.console import Console
 from rich.table import Table
 
-from anklelab._params import dotted_leaves
 from anklelab.commands._options import ForceOption
-from anklelab.platforms import PLATFORMS, load_platform
+from anklelab.platforms import PLATFORM_NAMES
 
 app = typer.Typer(help="Inspect platform parameter sets and their sources.", no_args_is_help=True)
 
@@ -34,6 +33,9 @@ def platform_markdown(name: str, file: Path | None = None) -> str:
     One table per section of the parameter file, headed by the section's description; the
     pages under ``docs/platforms/`` are this function's output (a test keeps them in sync).
     """
+    from anklelab._params import dotted_leaves
+    from anklelab.platforms import load_platform
+
     params = load_platform(name, file)
     origin = f"the shipped `{name}.toml`" if file is None else f"`{file}`"
     lines = [
@@ -60,7 +62,7 @@ def platform_markdown(name: str, file: Path | None = None) -> str:
     return "\n".join(lines) + "\n"
 
 
-Platform = StrEnum("Platform", {name: name for name in PLATFORMS})  # type: ignore[misc]
+Platform = StrEnum("Platform", {name: name for name in PLATFORM_NAMES})  # type: ignore[misc]
 """A platform with a shipped parameter set."""
 
 
@@ -93,6 +95,9 @@ def show(
     if markdown:
         typer.echo(platform_markdown(name.value, params), nl=False)
         return
+    from anklelab._params import dotted_leaves
+    from anklelab.platforms import load_platform
+
     loaded = load_platform(name.value, params)
     leaves = dotted_leaves(loaded.model_dump())
     table = Table(title=f"{name.value} parameters")
@@ -113,6 +118,8 @@ def check(
     ],
 ) -> None:
     """Validate a parameter file; exits non-zero with a message naming the bad key."""
+    from anklelab.platforms import load_platform
+
     load_platform(name.value, file)
     typer.echo(f"{file}: valid {name.value} parameters")
 
@@ -146,6 +153,7 @@ def bode(
     from anklelab._atomic import atomic_file
     from anklelab.commands._files import output_file
     from anklelab.experiments.perturberator_bode import measure_servo_bode
+    from anklelab.platforms import load_platform
 
     parameters = load_platform("perturberator", params)
     inputs = [] if params is None else [params]

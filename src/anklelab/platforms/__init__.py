@@ -1,60 +1,27 @@
 """Platform parameter sets: TOML files loaded into typed, validated, frozen objects.
 
+Importing this package costs nothing: every name but :data:`PLATFORM_NAMES` loads its module
+(pydantic, the parameter models) on first use, so ``anklelab --help`` stays fast.
+
 >>> from anklelab.platforms import load_platform
 >>> load_platform("perturberator").transmission.ratio
 70.0
 """
 
-from __future__ import annotations
+from anklelab._lazy import lazy_exports
 
-from importlib import resources
-from pathlib import Path
-from typing import Any
+PLATFORM_NAMES = ("perturberator", "capstan")
+"""The platforms that have a shipped parameter file, as the CLI offers them."""
 
-from anklelab._params import SOURCE_KINDS, Parameters, load_parameters
-from anklelab.errors import ParameterError
-from anklelab.platforms.capstan import CapstanParameters
-from anklelab.platforms.perturberator import PerturberatorParameters
-
-__all__ = [
-    "PLATFORMS",
-    "SOURCE_KINDS",
-    "CapstanParameters",
-    "Parameters",
-    "PerturberatorParameters",
-    "load_parameters",
-    "load_platform",
-    "platform_file",
-]
-
-PLATFORMS: dict[str, type[Parameters]] = {
-    "perturberator": PerturberatorParameters,
-    "capstan": CapstanParameters,
+_EXPORTS = {
+    "PLATFORMS": "registry",
+    "load_platform": "registry",
+    "platform_file": "registry",
+    "SOURCE_KINDS": "anklelab._params",
+    "Parameters": "anklelab._params",
+    "load_parameters": "anklelab._params",
+    "CapstanParameters": "capstan",
+    "PerturberatorParameters": "perturberator",
 }
-
-
-def platform_file(name: str) -> Path:
-    """Path of the parameter file shipped for platform ``name``."""
-    if name not in PLATFORMS:
-        raise ParameterError(
-            f"platform: unknown platform {name!r}; expected one of {sorted(PLATFORMS)}"
-        )
-    return Path(str(resources.files("anklelab.platforms") / f"{name}.toml"))
-
-
-def load_platform(name: str, path: str | Path | None = None) -> Any:
-    """Load a platform's parameters: the shipped set, or a user's TOML file for that platform.
-
-    Parameters
-    ----------
-    name : {"perturberator", "capstan"}
-        Which platform (selects the parameter model).
-    path : str or Path, optional
-        A user's parameter file; defaults to the one shipped with anklelab.
-
-    Returns
-    -------
-    PerturberatorParameters or CapstanParameters
-    """
-    file = platform_file(name) if path is None else Path(path)
-    return load_parameters(PLATFORMS[name], file)
+__all__ = ["PLATFORM_NAMES", *sorted(_EXPORTS)]
+__getattr__, __dir__ = lazy_exports(__name__, _EXPORTS)
