@@ -5,8 +5,8 @@ Each example corrupts one *slot* of one command (an option value, an input file'
 kind, an output path) and leaves the rest valid, so that the command would otherwise run. Bad
 values: garbage bytes, empty files, wrong types, huge numbers, NaN and infinities, negative
 counts, paths that are directories, missing, FIFOs or symbolic links, outputs that exist or lie
-inside an input. Known failures that belong to other layers are listed at the end, marked
-``xfail(strict=True)`` with the owner in the reason.
+inside an input. The reader and settings cases that once failed are kept at the end as
+regression tests.
 
 ``ANKLELAB_FUZZ_EXAMPLES`` sets the number of examples (default 300); hypothesis's statistics
 (``--hypothesis-show-statistics``) count the examples per slot and class.
@@ -753,11 +753,10 @@ def test_data_reader_cases(world, monkeypatch, capsys, change):
     assert not (folder / "o.h5").exists()
 
 
-# --- known failures in other layers (the owner removes the mark with the fix) ---------------
+# --- cases that once failed in the data readers and the settings model ----------------------
 
 
-@pytest.mark.xfail(strict=True, reason="settings model (pipelines): lead; infinities accepted")
-@pytest.mark.parametrize("line", ["window_ms = inf", "heel_contact_hold_ms = inf"])
+@pytest.mark.parametrize("line", ["window_ms = inf", "heel_contact_hold_ms = inf", "cutoff_hz = nan"])
 def test_infinite_settings(world, monkeypatch, capsys, line):
     folder = world.fresh()
     (folder / "st.toml").write_text(line + "\n")

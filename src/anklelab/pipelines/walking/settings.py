@@ -6,7 +6,7 @@ from pathlib import Path
 from typing import Any, Literal
 
 import numpy as np
-from pydantic import Field, model_validator
+from pydantic import ConfigDict, Field, model_validator
 
 from anklelab._params import Parameters, load_parameters
 
@@ -87,6 +87,8 @@ class WalkingSettings(Parameters):
         Paper 000's bootstrap (its ``sd``): repetitions, fraction of the perturbed trials per
         repetition; the seed of every random draw.
     """
+
+    model_config = ConfigDict(**Parameters.model_config, allow_inf_nan=False)
 
     cutoff_hz: float = Field(20.0, gt=0)
     filter_order: int = Field(4, ge=1, le=12)
