@@ -756,7 +756,9 @@ def test_data_reader_cases(world, monkeypatch, capsys, change):
 # --- cases that once failed in the data readers and the settings model ----------------------
 
 
-@pytest.mark.parametrize("line", ["window_ms = inf", "heel_contact_hold_ms = inf", "cutoff_hz = nan"])
+@pytest.mark.parametrize(
+    "line", ["window_ms = inf", "heel_contact_hold_ms = inf", "cutoff_hz = nan"]
+)
 def test_infinite_settings(world, monkeypatch, capsys, line):
     folder = world.fresh()
     (folder / "st.toml").write_text(line + "\n")
