@@ -116,3 +116,24 @@ def test_analysis_pipeline_does_not_load_the_twins():
     )
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert out.stdout.split() == ["False", "True"]
+
+
+def _command_paths(command, path=()):
+    """Every command and group below ``command``, as the words that name it."""
+    yield path
+    for name, sub in getattr(command, "commands", {}).items():
+        yield from _command_paths(sub, (*path, name))
+
+
+def test_every_help_page_speaks_to_users():
+    """No command's --help sends users to the design document or shows type placeholders
+    (``<str>``, ``<bool>``, ``TEXT``-style names of Python types) instead of what to give."""
+    import typer
+
+    paths = list(_command_paths(typer.main.get_command(app)))
+    assert len(paths) > 30  # every command and group, capstan's included
+    for path in paths:
+        result = runner.invoke(app, [*path, "--help"], terminal_width=200)
+        assert result.exit_code == 0, (path, result.output)
+        for bad in ("DESIGN.md", "<str>", "<bool>", "<int>", "<float>"):
+            assert bad not in result.output, (path, bad)

@@ -94,7 +94,7 @@ def checked(
 ) -> Any:
     """A number option with its help and range (see :func:`number`)."""
     callback = number(low=low, high=high, strict=strict, infinite=infinite)
-    return typer.Option(help=help, callback=callback)
+    return typer.Option(help=help, callback=callback, metavar="NUMBER")
 
 
 # ------------------------------------------------------------------------- the shared options
@@ -114,6 +114,7 @@ RateOption = Annotated[
         "--sample-rate",
         help="Control rate, Hz (1000-10000).",
         callback=number(low=1000.0, high=10000.0),
+        metavar="NUMBER",
     ),
 ]
 PersonOption = Annotated[
@@ -133,6 +134,7 @@ FrictionCompOption = Annotated[
         "--friction-comp",
         help="Fraction (0-1) of the model friction compensated.",
         callback=number(low=0.0, high=1.0),
+        metavar="NUMBER",
     ),
 ]
 FrictionModelOption = Annotated[
@@ -150,6 +152,7 @@ SettlingOption = Annotated[
         "--settling-time",
         help="Design settling time of the position loop, s.",
         callback=number(low=0.0, high=10.0, strict=True),
+        metavar="NUMBER",
     ),
 ]
 OutOption = Annotated[

@@ -56,7 +56,11 @@ def design(
         ),
     ] = 0.8,
     pilot: Annotated[
-        str, typer.Option(help="Trials per timing point of the pilot sessions, comma-separated.")
+        str,
+        typer.Option(
+            help="Trials per timing point of the pilot sessions, comma-separated.",
+            metavar="N,N,...",
+        ),
     ] = "10,20,40",
     seeds: Annotated[int, typer.Option(help="Pilot sessions per count.", min=1)] = 2,
     settings_file: SettingsOption = None,

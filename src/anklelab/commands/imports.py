@@ -92,7 +92,9 @@ def import_matlab(
     out: OutOption,
     subject: Annotated[
         str | None,
-        typer.Option(help="The subject to import when the mapping matches several."),
+        typer.Option(
+            help="The subject to import when the mapping matches several.", metavar="NAME"
+        ),
     ] = None,
     force: ForceOption = False,
 ) -> None:
