@@ -46,6 +46,7 @@ KINEMATICS = ("angle", "velocity", "acceleration")
 _KIN = [RESPONSE.index(name) for name in KINEMATICS]
 _TORQUE = RESPONSE.index("torque")
 _FULL = 0  # row of the all-trial average among the stacked averages
+_SYSTEMATIC = ("stiffness", "damping", "inertia")  # quantities whose intervals are widened
 
 
 def condition_order(stance: Trials) -> list[str]:
@@ -71,20 +72,6 @@ def _fit(averages: NDArray[np.float64], lengths: list[int], model: str, fs: floa
     )
 
 
-def _window_stiffness(
-    average: NDArray[np.float64],
-    windows: tuple[float, ...],
-    lengths: list[int],
-    model: str,
-    fs: float,
-) -> dict[str, float]:
-    """The all-trial stiffness over each sensitivity window (``windows[1:]``, ms)."""
-    if len(windows) < 2:
-        return {}
-    stiffness = _fit(average, lengths[1:], model, fs).stiffness[:, 0]
-    return {f"{w:g}": float(k) for w, k in zip(windows[1:], stiffness, strict=True)}
-
-
 def _focused_choice(constant: NDArray[np.float64], linear: NDArray[np.float64]) -> str:
     """The model whose stiffness has the smaller estimated mean squared error.
 
@@ -96,43 +83,41 @@ def _focused_choice(constant: NDArray[np.float64], linear: NDArray[np.float64]) 
 
 
 def _systematic(
-    average: NDArray[np.float64], lengths: list[int], model: str, shift: int, fs: float
+    full: NDArray[np.float64],
+    n: int,
+    model: str,
+    shift: int,
+    fs: float,
+    centre: dict[str, float],
+    by_window: ImpedanceFit | None,
 ) -> dict[str, float]:
-    """How far each all-trial estimate moves under what the data cannot pin down.
+    """How far each all-trial estimate (``centre``) moves under what the data cannot pin down.
 
-    The torque shifted by ``±shift`` samples against the kinematics (the timing between the
-    encoder and the plate's channels, anti-alias filters and converter skew included, is known
-    only to about a sample: ``θ(t - δ) ≈ θ - δ θ'`` moves damping by ``k δ`` and inertia by
-    ``b δ``), and, for damping and inertia, the sensitivity windows (a stiffness that changes
-    within the window leaks into them). The stiffness's change between windows is a real
-    change over time, not an error, and is left out.
+    The torque of the all-trial average ``full`` (shape ``(1, 4, n_times)``) shifted by
+    ``±shift`` samples against the kinematics (the timing between the encoder and the plate's
+    channels, anti-alias filters and converter skew included, is known only to about a sample:
+    ``θ(t - δ) ≈ θ - δ θ'`` moves damping by ``k δ`` and inertia by ``b δ``), and, for damping
+    and inertia, the sensitivity windows' fits ``by_window`` (a stiffness that changes within the
+    window leaks into them). The stiffness's change between windows is a real change over time,
+    not an error, and is left out.
 
     Returns the largest absolute move per quantity (``stiffness``, ``damping``, ``inertia``).
     """
-    n = lengths[0]
-    kin, torque = average[:, _KIN], average[:, _TORQUE]
+    kin, torque = full[:, _KIN], full[:, _TORQUE]
     variants = []
-    if shift and average.shape[-1] >= n + shift:
+    if shift and full.shape[-1] >= n + shift:
         for lead in (shift, -shift):  # torque later / earlier than the kinematics
             k0, t0 = (0, lead) if lead > 0 else (-lead, 0)
             variants.append(
                 fit_impedance(
-                    kin[..., k0 : k0 + n],
-                    torque[..., t0 : t0 + n],
-                    stiffness_model=model,
-                    fs=fs,
+                    kin[..., k0 : k0 + n], torque[..., t0 : t0 + n], stiffness_model=model, fs=fs
                 )
             )
-    centre = fit_impedance(kin[..., :n], torque[..., :n], stiffness_model=model, fs=fs)
-    if len(lengths) > 1:
-        windows = fit_impedance(kin, torque, lengths=lengths[1:], stiffness_model=model, fs=fs)
     moves = {}
-    for name in ("stiffness", "damping", "inertia"):
-        values = [np.ravel(getattr(v, name)) for v in variants]
-        if len(lengths) > 1 and name != "stiffness":
-            values.append(np.ravel(getattr(windows, name)))
-        moved = np.abs(np.concatenate([np.empty(0), *values]) - np.ravel(getattr(centre, name)))
-        moves[name] = float(moved.max(initial=0.0))
+    for name, value in centre.items():
+        fits = variants if name == "stiffness" or by_window is None else [*variants, by_window]
+        moved = [np.ravel(getattr(fit, name)) - value for fit in fits]
+        moves[name] = float(np.abs(np.concatenate([np.zeros(1), *moved])).max())
     return moves
 
 
@@ -213,8 +198,11 @@ def estimate_timing_point(
     low, high = change_estimate.ci95
     threshold = settings.change_threshold
     changes = bool(low > threshold or high < -threshold)
+    full = averages[_FULL : _FULL + 1]
+    by_window = _fit(full, lengths[1:], model, fs) if len(lengths) > 1 else None
     shift = round(settings.timing_uncertainty_ms * fs / 1000.0)
-    systematic = _systematic(averages[_FULL : _FULL + 1], lengths, model, shift, fs)
+    centre = {name: float(getattr(chosen, name)[0][_FULL]) for name in _SYSTEMATIC}
+    systematic = _systematic(full, n, model, shift, fs, centre, by_window)
     estimates = {
         name: _estimate(
             getattr(chosen, name)[0], reps, paper, len(trials), systematic.get(name, 0.0)
@@ -225,8 +213,7 @@ def estimate_timing_point(
     estimates["vaf"] = replace(vaf, ci95=(vaf.ci95[0], min(vaf.ci95[1], 100.0)))
     analysis = ImpedanceFit(*(values[0][paper] for values in chosen))
     subset_avg = averages[paper]
-    angle = trials.get_data("angle")[:, :n].mean(axis=0)
-    weight = angle**2
+    weight = averages[_FULL, RESPONSE.index("angle"), :n] ** 2
     warnings = _warnings(key, estimates, change_estimate, changes, model, window_s)
     return TimingPoint(
         delay_ms=float(key.split("/")[1]),
@@ -243,9 +230,11 @@ def estimate_timing_point(
             if model == "linear"
             else None
         ),
-        window_stiffness=_window_stiffness(
-            averages[_FULL : _FULL + 1], windows, lengths, model, fs
-        ),
+        window_stiffness={}
+        if by_window is None
+        else {
+            f"{w:g}": float(k) for w, k in zip(windows[1:], by_window.stiffness[:, 0], strict=True)
+        },
         adjustment_explained=responses.explained,
         warnings=warnings,
         onset_ms=trials.metadata["onset_ms"],
