@@ -159,14 +159,21 @@ class Trials:
         except ValueError:
             raise KeyError(f"{name!r}: no such channel; have {', '.join(self.ch_names)}") from None
 
-    def drop(self, mask: ArrayLike, reason: str) -> Trials:
-        """A copy without the trials where ``mask`` is true, logging ``reason`` for each."""
+    def drop(self, mask: ArrayLike, reason: str | Sequence[str]) -> Trials:
+        """A copy without the trials where ``mask`` is true, logging ``reason`` for each (one
+        text for all, or one per dropped trial in order)."""
         mask = np.asarray(mask, dtype=bool)
         if mask.shape != (len(self),):
             raise ParameterError(f"mask: expected {len(self)} booleans, got shape {mask.shape}")
+        positions = self.selection[mask]
+        reasons = [reason] * len(positions) if isinstance(reason, str) else list(reason)
+        if len(reasons) != len(positions):
+            raise ParameterError(
+                f"reason: expected one text or {len(positions)}, got {len(reasons)}"
+            )
         log = list(self.drop_log)
-        for position in self.selection[mask]:
-            log[position] = (*log[position], reason)
+        for position, text in zip(positions, reasons, strict=True):
+            log[position] = (*log[position], text)
         kept = np.flatnonzero(~mask)
         out = self._subset(kept)
         out.drop_log = tuple(log)

@@ -98,8 +98,9 @@ def analyze_walking(
     points = []
     for key in condition_order(stance):
         responses = condition_responses(stance, key, unperturbed, settings)
-        for position, reason in responses.dropped.items():
-            stance = stance.drop(stance.selection == position, reason)
+        if responses.dropped:
+            wild = np.isin(stance.selection, list(responses.dropped))
+            stance = stance.drop(wild, [responses.dropped[p] for p in stance.selection[wild]])
         points.append(estimate_timing_point(responses, key, len(unperturbed), settings, rng))
     report(STEPS[3])
     held_out = len(session.calibration) > 1
@@ -130,13 +131,14 @@ def _drop_unperturbed_outliers(stance: Trials, limit: float) -> Trials:
     picks = [stance.ch_names.index(name) for name in _SCREENED]
     wild = np.zeros(len(stance), dtype=bool)
     wild[unperturbed] = outliers(stance.data[unperturbed][:, picks], limit)
-    for position, trial in zip(stance.selection[wild], stance.metadata["trial"][wild], strict=True):
-        stance = stance.drop(
-            stance.selection == position,
+    return stance.drop(
+        wild,
+        [
             f"its stance departs from the other unperturbed trials' median by more than "
-            f"{limit:g} robust sd (a glitch?) [trial {trial}]",
-        )
-    return stance
+            f"{limit:g} robust sd (a glitch?) [trial {trial}]"
+            for trial in stance.metadata["trial"][wild]
+        ],
+    )
 
 
 def _drop_counts(stance: Trials) -> dict[str, int]:
