@@ -10,15 +10,17 @@ The steps follow paper 000 (sections 2.2, 2.3, 2.4.2, 3) and DESIGN.md section 5
    ankle torque computed with the COP and the ankle angle zeroed at heel contact; derivatives
    of the angle by a local quadratic fit; the true perturbation onset detected from the motor
    angle. Trials that fail a check are dropped with the reason logged.
-3. **Ensembles**: for each timing point (manifest ``delay_ms``) and direction, every perturbed
-   trial is cut at its own detected onset and the mean unperturbed trial, cut at the same time
-   after heel contact, is subtracted; angle and torque offsets (read before the low-pass has
-   spread the perturbation backwards in time) are removed; bootstrap averages of random
-   subsets of the perturbed trials are formed.
-4. **Model**: ``T = I θ'' + b θ' + k θ`` fitted to each bootstrap average over the analysis
-   window and the sensitivity windows (optionally with a stiffness that changes linearly
-   within the window, ``stiffness_model = "linear"``); ``cop_m`` is the θ²-weighted nominal
-   lever arm.
+3. **Responses** (:mod:`.responses`): for each timing point and direction, every perturbed
+   trial is cut at its own detected onset and the unperturbed trials, cut at the same time after
+   heel contact, are subtracted; angle and torque offsets (read before the low-pass has spread
+   the perturbation backwards in time) are removed; each trial's own gait variation, predicted
+   from its signals before the onset (:mod:`.adjustment`), is removed; trials far from their
+   group's median (a glitch) are dropped with a reason.
+4. **Model** (:mod:`.impedance`): ``T = I θ'' + b θ' + k(t) θ`` fitted to the all-trial average
+   with a constant and a linearly changing stiffness, the model chosen per point
+   (``stiffness_model = "auto"``); 95 % intervals from resampling the trials, widened by what
+   the data cannot pin down; paper 000's subset sd beside them; ``cop_m`` is the θ²-weighted
+   nominal lever arm; plausibility checks (:mod:`.checks`).
 5. **Bench**: stiffness per actuator distance and the walking-vs-bench error at ``cop_m``.
 
 Everything is read from the session (sample rate, plate geometry and mounting, subject geometry,
