@@ -130,12 +130,30 @@ def test_sparse_2_gb_recording_is_refused_before_reading(session_dir):
         "    print(exc)\n"
         "print(re.search(r'VmHWM:\\s+(\\d+)', open('/proc/self/status').read())[1])\n"
     )
-    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    out = subprocess.run(
+        [sys.executable, "-X", "faulthandler", "-c", code], capture_output=True, text=True
+    )
+    assert out.returncode == 0, out.stderr[-3000:]
     message, peak_kib = out.stdout.strip().rsplit("\n", 1)
     assert "trial_0005.csv: is 2 GiB, more than the limit of 1 GiB for a CSV file" in message
     # the process's own peak (VmHWM; ru_maxrss would count the forking test process): the
     # interpreter and libraries, not the file
     assert int(peak_kib) < 400 * 1024
+
+
+def test_file_that_grows_while_read_is_refused(session_dir, monkeypatch):
+    """Only the bytes the file held when opened are asked for: a file still being written (here
+    one seen 10 bytes shorter than it is) is named, never parsed half-written."""
+    import anklelab.data._files as files
+
+    real = files.os.fstat
+
+    def shorter(fd):
+        info = real(fd)
+        return os.stat_result((*info[:6], info.st_size - 10, *info[7:10]))
+
+    monkeypatch.setattr(files.os, "fstat", shorter)
+    rejected(session_dir, r"session\.toml: changed size while being read .*still being written")
 
 
 def test_oversized_manifest_and_toml(session_dir):

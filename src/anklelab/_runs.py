@@ -112,9 +112,9 @@ def read_inside(directory: str | os.PathLike[str], name: str, *, limit: int) -> 
             raise NotEmbeddable(f"{path}: not a regular file")
         raise NotEmbeddable(f"{path}: {info.st_size} bytes; more than the {limit} expected")
     with os.fdopen(fd, "rb") as f:
-        data = f.read(limit + 1)
-    if len(data) > limit:
-        raise NotEmbeddable(f"{path}: more than the {limit} bytes expected")
+        data = f.read(info.st_size + 1)  # a buffer of the file's size, not of ``limit``
+    if len(data) != info.st_size:
+        raise NotEmbeddable(f"{path}: changed size while being read")
     return data
 
 

@@ -109,12 +109,13 @@ def read_bytes(path: Path, root: Path, limit: int, expected: str = "a CSV file")
                 f"{path}: is {format_bytes(info.st_size)}, more than the limit of "
                 f"{format_bytes(limit)} for {expected}"
             )
-        try:
-            data = f.read(limit + 1)
+        try:  # one byte more than its size shows a file that grew; never a ``limit``-sized buffer
+            data = f.read(info.st_size + 1)
         except OSError as exc:
             raise SessionFormatError(f"{path}: cannot be read ({exc.strerror})") from None
-    if len(data) > limit:  # it grew while being read
+    if len(data) != info.st_size:
         raise SessionFormatError(
-            f"{path}: is more than the limit of {format_bytes(limit)} for {expected}"
+            f"{path}: changed size while being read ({format_bytes(info.st_size)} when opened); "
+            "a file still being written cannot be read"
         )
     return data
