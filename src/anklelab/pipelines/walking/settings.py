@@ -48,6 +48,13 @@ class WalkingSettings(Parameters):
         the angle filter (samples; 1 = a static gain, see
         :class:`~anklelab.ident.irf.PlatformFilters`), estimator, calibration trial (index)
         they are fitted on; the other calibration trials score them.
+    transmission_stiffness_nm_per_rad
+        Torsional stiffness between the motor's angle sensor and the plate (gearbox and coupler
+        in series), N·m/rad; paper 000: 12 N·m/arcmin. The platform filters, fitted with nobody
+        on the plate, predict the plate's own forces from the motor angle; under the foot's
+        torque ``T`` the plate lags the motor by the coupler's twist ``T / K``, so the filters
+        are fed the motor angle minus that twist (see :func:`~.stance.stance_trials`). 0: the
+        motor angle is taken as the plate's angle, as in paper 000.
     window_ms, sensitivity_windows_ms
         Impedance analysis window after the onset and the alternative windows checked.
     offset_reference_ms
@@ -107,6 +114,7 @@ class WalkingSettings(Parameters):
     angle_lags: int = Field(1, ge=1)
     filter_method: Literal["pinv", "toeplitz"] = "pinv"
     calibration_fit_trial: int = Field(0, ge=0)
+    transmission_stiffness_nm_per_rad: float = Field(12 * 10800 / np.pi, ge=0)
     window_ms: float = Field(100.0, gt=0)
     offset_reference_ms: float | None = Field(None, ge=0)
     sensitivity_windows_ms: tuple[float, ...] = (75.0, 125.0)

@@ -1,8 +1,9 @@
 """Walking trials to heel-contact-aligned stance trials, every dropped trial logged with why.
 
 Each walking file is zeroed over its unloaded start; heel contact is detected from the vertical
-force; the platform's own force transients (predicted from the motor angle by the platform
-filters) are subtracted from the low-passed sagittal load; the COP, the lever arm ``dx`` and the
+force; the platform's own force transients (predicted by the platform filters from the motor
+angle less the coupler's twist under the foot's torque) are subtracted from the low-passed
+sagittal load; the COP, the lever arm ``dx`` and the
 ankle torque are computed with the COP zeroed at heel contact; the ankle angle's derivatives come
 from a local quadratic fit; and the perturbation onset is detected from the motor angle.
 """
@@ -174,10 +175,6 @@ def stance_trials(
     rows = np.arange(len(walking))
 
     lp = {"fs": fs, "cutoff_hz": settings.cutoff_hz, "order": settings.filter_order}
-    grf_x, grf_z, moment = np.moveaxis(
-        lowpass(load_raw, **lp) - filters.predict(motor, combine=sagittal), 1, 0
-    )
-    cop_x = cop_from_moment(moment, grf_z)
     cop0 = _cop_at_contact(
         load_raw[:, 1],
         load_raw[:, 2],
@@ -188,13 +185,29 @@ def stance_trials(
         settings.contact_cop_degree,
     )
     cop_defined = np.isfinite(cop0)
-    cop_x[rows, event] = np.where(cop_defined, cop0, 0.0)  # ankle_torque zeroes the COP here
-    torque, dx = ankle_torque(
-        SagittalLoad(grf_x, grf_z, cop_x),
-        event,
-        heel_to_ankle_m=info.heel_to_ankle_m,
-        ankle_height_m=info.ankle_height_m,
-    )
+    load_lp = lowpass(load_raw, **lp)
+
+    def foot_load(plate_angle: NDArray[np.float64]) -> tuple[NDArray[np.float64], ...]:
+        """The foot's GRF, torque and lever arm: the low-passed load minus the plate's own
+        forces predicted for ``plate_angle``."""
+        grf_x, grf_z, moment = np.moveaxis(
+            load_lp - filters.predict(plate_angle, combine=sagittal), 1, 0
+        )
+        cop_x = cop_from_moment(moment, grf_z)
+        cop_x[rows, event] = np.where(cop_defined, cop0, 0.0)  # ankle_torque zeroes it here
+        torque, dx = ankle_torque(
+            SagittalLoad(grf_x, grf_z, cop_x),
+            event,
+            heel_to_ankle_m=info.heel_to_ankle_m,
+            ankle_height_m=info.ankle_height_m,
+        )
+        return grf_z, torque, dx
+
+    grf_z, torque, dx = foot_load(motor)
+    if stiffness := settings.transmission_stiffness_nm_per_rad:
+        # the foot's torque twists the coupler: the plate's own forces follow the plate, which
+        # lags the motor by T/K (the hinge is on the ankle's axis, so T is the load about it)
+        grf_z, torque, dx = foot_load(motor - np.nan_to_num(torque) / stiffness)
     ankle = lowpass(ankle_raw, **lp)
     kin = kinematics(ankle - ankle[rows, event][:, None], fs, settings.derivative_window)
 
