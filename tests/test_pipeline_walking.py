@@ -195,6 +195,10 @@ GEOMETRIES = {
 }
 
 
+# the hand-made platform's motor angle is its plate's angle: no coupler for the foot to twist
+RIGID = {"transmission_stiffness_nm_per_rad": 0.0}
+
+
 @pytest.fixture(scope="module", params=list(GEOMETRIES))
 def mini(request):
     return MiniSession(GEOMETRIES[request.param], seed=1)
@@ -202,7 +206,7 @@ def mini(request):
 
 @pytest.fixture(scope="module")
 def analysed(mini):
-    return analyze_walking(mini.session, WalkingSettings(bootstrap_reps=60))
+    return analyze_walking(mini.session, WalkingSettings(bootstrap_reps=60, **RIGID))
 
 
 def _half(estimate):
@@ -240,7 +244,7 @@ def test_linear_stiffness_model_recovers_constant_impedance_and_reports_the_slop
     """On a foot whose stiffness does not change, the linear model finds K and a slope that is
     zero within its sampling error; results.json and the table gain the slope."""
     result = analyze_walking(
-        mini.session, WalkingSettings(bootstrap_reps=60, stiffness_model="linear")
+        mini.session, WalkingSettings(bootstrap_reps=60, stiffness_model="linear", **RIGID)
     )
     for tp in result.timing_points:
         assert tp.stiffness_model == "linear"
@@ -270,7 +274,7 @@ def test_offset_reference_follows_the_low_pass(mini, cutoff_hz, reference_ms):
     their mean error within three standard errors of it (no allowance: no systematic error).
     Read 80 ms early at 10 Hz (1.9 time constants) they are not: k +0.7 to +1.1 %, I +4.6 to
     +5.5 % at every condition, and the mean-error check fails."""
-    settings = WalkingSettings(bootstrap_reps=60, cutoff_hz=cutoff_hz)
+    settings = WalkingSettings(bootstrap_reps=60, cutoff_hz=cutoff_hz, **RIGID)
     assert settings.offset_reference_ms is None
     assert settings.offset_reference() == pytest.approx(reference_ms)
     result = analyze_walking(mini.session, settings)
@@ -360,9 +364,9 @@ def test_validation_error_is_against_the_bench_line_at_cop(analysed):
 
 
 def test_same_seed_same_numbers_and_other_seed_differs(mini, analysed):
-    again = analyze_walking(mini.session, WalkingSettings(bootstrap_reps=60))
+    again = analyze_walking(mini.session, WalkingSettings(bootstrap_reps=60, **RIGID))
     assert np.array_equal(again.timing_points[0].stiffness, analysed.timing_points[0].stiffness)
-    other = analyze_walking(mini.session, WalkingSettings(bootstrap_reps=60, seed=5))
+    other = analyze_walking(mini.session, WalkingSettings(bootstrap_reps=60, seed=5, **RIGID))
     assert not np.array_equal(other.timing_points[0].stiffness, analysed.timing_points[0].stiffness)
 
 
