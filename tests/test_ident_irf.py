@@ -187,18 +187,6 @@ def test_platform_filters_angle_pathway_captures_gravity(calibration):
     assert np.max(np.abs(acc_only.predict(hold)[:, -1] - truth)) > 0.2 * truth.max()
 
 
-def test_platform_filters_take_a_low_passed_input_as_it_is(calibration):
-    """``lowpassed=True`` skips the filters' own low-pass: the prediction for a signal already in
-    the low-pass domain equals the prediction for the raw signal (the zero-phase low-pass is
-    applied once, not twice)."""
-    angles, forces = calibration
-    filters = PlatformFilters().fit(angles[0], forces[0], fs=FS)
-    low = lowpass(angles[1], FS, filters.cutoff_hz, order=filters.filter_order)
-    assert np.allclose(filters.predict(low, lowpassed=True), filters.predict(angles[1]))
-    twice = filters.predict(low)
-    assert not np.allclose(twice, filters.predict(angles[1]), atol=0.01 * np.abs(twice).max())
-
-
 def _band_response(irf, f_hz):
     """Frequency response of FIR weights (..., n_lags) at ``f_hz``."""
     return np.array([freqz(h, 1, worN=f_hz, fs=FS)[1] for h in irf.reshape(-1, irf.shape[-1])])

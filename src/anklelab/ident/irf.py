@@ -360,17 +360,10 @@ class PlatformFilters(Estimator):
         self._validate_params()
         return tuple(self.angle_lags if name == "angle" else self.n_lags for name in self.inputs)
 
-    def input_signals(
-        self, motor_angle: ArrayLike, fs: float, *, lowpassed: bool = False
-    ) -> NDArray[np.float64]:
-        """The filter inputs for a motor angle: shape ``(..., n_inputs, n_times)``; with
-        ``lowpassed`` the angle is taken as already low-passed and is not filtered again."""
+    def input_signals(self, motor_angle: ArrayLike, fs: float) -> NDArray[np.float64]:
+        """The filter inputs for a motor angle: shape ``(..., n_inputs, n_times)``."""
         self._validate_params()
-        angle = (
-            np.asarray(motor_angle, dtype=float)
-            if lowpassed
-            else lowpass(motor_angle, fs, self.cutoff_hz, order=self.filter_order)
-        )
+        angle = lowpass(motor_angle, fs, self.cutoff_hz, order=self.filter_order)
         signals = {"angle": angle}
         for deriv, name in ((1, "velocity"), (2, "acceleration")):
             if name in self.inputs:
@@ -413,11 +406,7 @@ class PlatformFilters(Estimator):
         return lowpass(forces, fs, self.cutoff_hz, order=self.filter_order)
 
     def predict(
-        self,
-        motor_angle: ArrayLike,
-        *,
-        combine: ArrayLike | None = None,
-        lowpassed: bool = False,
+        self, motor_angle: ArrayLike, *, combine: ArrayLike | None = None
     ) -> NDArray[np.float64]:
         """Platform force transients (low-pass domain), N.
 
@@ -429,9 +418,6 @@ class PlatformFilters(Estimator):
         combine : array_like, shape (n_combinations, n_channels), optional
             Predict these linear combinations of the channels instead of every channel (e.g.
             the sagittal resultants; cheaper when there are fewer combinations than channels).
-        lowpassed : bool
-            ``motor_angle`` is already in the low-pass domain (e.g. computed from low-passed
-            forces): it is not low-passed again.
 
         Returns
         -------
@@ -441,7 +427,7 @@ class PlatformFilters(Estimator):
         irf = self.irf_
         if combine is not None:
             irf = np.einsum("mc,cil->mil", np.asarray(combine, dtype=float), irf)
-        return _filter(self.input_signals(motor_angle, self.fs_, lowpassed=lowpassed), irf)
+        return _filter(self.input_signals(motor_angle, self.fs_), irf)
 
     def vaf(
         self, motor_angle: ArrayLike, forces: ArrayLike

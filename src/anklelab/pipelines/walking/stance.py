@@ -187,10 +187,12 @@ def stance_trials(
     cop_defined = np.isfinite(cop0)
     load_lp = lowpass(load_raw, **lp)
 
-    def foot_load(own: NDArray[np.float64]) -> tuple[NDArray[np.float64], ...]:
-        """The foot's GRF, torque and lever arm: the low-passed load minus the plate's ``own``
-        forces."""
-        grf_x, grf_z, moment = np.moveaxis(load_lp - own, 1, 0)
+    def foot_load(plate_angle: NDArray[np.float64]) -> tuple[NDArray[np.float64], ...]:
+        """The foot's GRF, torque and lever arm: the low-passed load minus the plate's own
+        forces predicted for ``plate_angle``."""
+        grf_x, grf_z, moment = np.moveaxis(
+            load_lp - filters.predict(plate_angle, combine=sagittal), 1, 0
+        )
         cop_x = cop_from_moment(moment, grf_z)
         cop_x[rows, event] = np.where(cop_defined, cop0, 0.0)  # ankle_torque zeroes it here
         torque, dx = ankle_torque(
@@ -201,16 +203,14 @@ def stance_trials(
         )
         return grf_z, torque, dx
 
-    own = filters.predict(motor, combine=sagittal)
-    grf_z, torque, dx = foot_load(own)
+    grf_z, torque, dx = foot_load(motor)
     if stiffness := settings.transmission_stiffness_nm_per_rad:
-        # the foot's torque T twists the coupler: the plate, whose own forces the filters
-        # predict, lags the motor by T/K (the hinge is on the ankle's axis). T is already in
-        # the low-pass domain, so the filters take it as it is.
-        twist = np.nan_to_num(torque) / stiffness
-        grf_z, torque, dx = foot_load(
-            own - filters.predict(twist, combine=sagittal, lowpassed=True)
-        )
+        # the foot's torque twists the coupler: the plate's own forces follow the plate, which
+        # lags the motor by T/K (the hinge is on the ankle's axis, so T is the load about it).
+        # T passes the filters' low-pass once more: the filters are known only in the band the
+        # calibration excites, and T's content near the cut-off, fed to them unfiltered,
+        # wrecked sessions with a stiff foot (walking-analysis guide)
+        grf_z, torque, dx = foot_load(motor - np.nan_to_num(torque) / stiffness)
     ankle = lowpass(ankle_raw, **lp)
     kin = kinematics(ankle - ankle[rows, event][:, None], fs, settings.derivative_window)
 
