@@ -4,8 +4,9 @@ The baseline is paper 000's analysis written the straightforward way: every walk
 filtered, corrected and segmented on its own, the platform filters applied channel by channel
 with ``np.convolve``, one ``np.linalg.lstsq`` for the all-trial average and one per bootstrap
 repetition and window. Both run with the paper's model (constant stiffness, no covariate
-adjustment, no outlier screen) and must give the same all-trial stiffness (checked); ours also
-fits the linear model and resamples for the intervals, the baseline does not.
+adjustment, no outlier screen, the motor angle taken as the plate's) and must give the same
+all-trial stiffness (checked); ours also fits the linear model and resamples for the intervals,
+the baseline does not.
 """
 
 from __future__ import annotations
@@ -117,7 +118,11 @@ def _session():
 def run() -> list[Result]:
     session = _session()
     settings = WalkingSettings(
-        stiffness_model="constant", covariate_adjustment=False, outlier_mads=1e9, interval_reps=100
+        stiffness_model="constant",
+        covariate_adjustment=False,
+        outlier_mads=1e9,
+        interval_reps=100,
+        transmission_stiffness_nm_per_rad=0.0,
     )
     ours = analyze_walking(session, settings)
     theirs = per_trial_loop(session, settings)
