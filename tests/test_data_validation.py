@@ -490,6 +490,7 @@ TOML_VALUES = st.recursive(
             ("force_plate", "a_m"),
             ("force_plate", "az0_m"),
             ("force_plate", "anterior_axis"),
+            ("force_plate", "type"),
             ("geometry",),
             ("geometry", "heel_to_ankle_m"),
             ("extra",),
@@ -509,3 +510,14 @@ def test_any_session_toml_value_is_accepted_or_named(key, value):
         info_from_mapping(document, "session.toml")
     except SessionFormatError as exc:
         assert str(exc).startswith("session.toml: ") and len(str(exc)) < 600
+
+
+def test_a_plate_type_read_as_an_array_is_named():
+    """A damaged MATLAB v7.3 file gave ``force_plate.type`` as a numeric array (found by the
+    v7.3 fuzz test): named, not a NumPy truth-value error."""
+    from anklelab.data._checks import info_from_mapping, info_to_mapping
+
+    document = info_to_mapping(random_session().info)
+    document["force_plate"]["type"] = np.array([107.0, 105.0])
+    with pytest.raises(SessionFormatError, match=r"force_plate\.type: expected one of kistler8"):
+        info_from_mapping(document, "session.toml")

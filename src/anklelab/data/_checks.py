@@ -166,7 +166,7 @@ def info_from_mapping(data: Mapping[str, Any], origin: str, prefix: str = "") ->
         raise SessionFormatError(f"{where}subject: expected a string, got {excerpt(subject)}")
     plate = _table(data, "force_plate", origin, prefix)
     plate_type = plate.pop("type", "kistler8")
-    if plate_type not in PLATE_TYPES:
+    if not isinstance(plate_type, str) or plate_type not in PLATE_TYPES:
         raise SessionFormatError(
             f"{where}force_plate.type: expected one of {', '.join(PLATE_TYPES)}, got "
             f"{excerpt(plate_type)}"
