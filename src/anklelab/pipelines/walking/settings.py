@@ -114,7 +114,7 @@ class WalkingSettings(Parameters):
     angle_lags: int = Field(1, ge=1)
     filter_method: Literal["pinv", "toeplitz"] = "pinv"
     calibration_fit_trial: int = Field(0, ge=0)
-    transmission_stiffness_nm_per_rad: float = Field(12 * 10800 / np.pi, ge=0)
+    transmission_stiffness_nm_per_rad: float = Field(41252.96, ge=0)  # 12 N·m/arcmin
     window_ms: float = Field(100.0, gt=0)
     offset_reference_ms: float | None = Field(None, ge=0)
     sensitivity_windows_ms: tuple[float, ...] = (75.0, 125.0)
