@@ -68,3 +68,27 @@ def test_overwrite_false_refuses(tmp_path, fmt):
     target = save_session(random_session(), tmp_path / "out", format=fmt)
     with pytest.raises(FileExistsError, match="already exists"):
         save_session(random_session(), target, format=fmt, overwrite=False)
+
+
+@pytest.fixture
+def interrupted():
+    """A signal noted as the command line's handler notes it; forgotten afterwards."""
+    from anklelab._atomic import note_interrupt
+
+    note_interrupt(2)
+    yield
+    note_interrupt(None)
+
+
+def test_after_an_interrupt_nothing_is_committed(tmp_path, interrupted):
+    """A signal whose exception was swallowed (a handler that fired inside ``__del__``) still
+    keeps the outputs from being committed: the temporary is removed, the target untouched."""
+    from anklelab._atomic import Interrupted, atomic_directory, write_text_atomic
+
+    (tmp_path / "kept.txt").write_text("old")
+    with pytest.raises(Interrupted):
+        write_text_atomic(tmp_path / "kept.txt", "new")
+    with pytest.raises(Interrupted), atomic_directory(tmp_path / "out") as building:
+        (building / "results.json").write_text("{}")
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["kept.txt"]
+    assert (tmp_path / "kept.txt").read_text() == "old"

@@ -388,6 +388,24 @@ def test_hdf5_writer_fails_cleanly_on_a_full_disk(big_session):
 # --- interrupted runs ---------------------------------------------------------------------
 
 
+def test_an_interrupt_inside_a_finaliser_is_not_printed_as_a_traceback():
+    """A signal handled inside ``__del__`` or a weak-reference callback cannot unwind from there;
+    Python hands the exception to ``sys.unraisablehook``, which the command line keeps quiet
+    about it (the interruption stops the next commit instead); other such errors still show."""
+    from types import SimpleNamespace
+
+    from anklelab._atomic import Interrupted
+    from anklelab.cli import _unraisable
+
+    shown = []
+    hook = _unraisable(shown.append)
+    hook(SimpleNamespace(exc_value=Interrupted(2)))
+    assert shown == []
+    other = SimpleNamespace(exc_value=ValueError("a real problem"))
+    hook(other)
+    assert shown == [other]
+
+
 @pytest.mark.parametrize("number", [signal.SIGTERM, signal.SIGINT])
 def test_an_interrupted_run_removes_its_temporaries(twin, tmp_path, number):
     """SIGTERM or SIGINT while the output is being built: one line, nothing left behind."""

@@ -9,6 +9,12 @@ new one. A temporary is a hidden sibling whose name records the writing process
 
 A directory that already exists is swapped with the new one in a single step where the file
 system allows it (Linux ``renameat2(RENAME_EXCHANGE)``), so the target never goes missing.
+
+An interruption (SIGINT, SIGTERM) noted with :func:`note_interrupt` stops every later commit:
+the command line's signal handler raises :class:`Interrupted` to unwind the command, but a
+handler that fires inside a finaliser (``__del__``, a weak-reference callback) has its exception
+swallowed by Python, and the command would then run on and commit its outputs as if nothing had
+happened.
 """
 
 from __future__ import annotations
@@ -27,9 +33,11 @@ from pathlib import Path
 from typing import Any
 
 __all__ = [
+    "Interrupted",
     "atomic_directory",
     "atomic_file",
     "is_temporary",
+    "note_interrupt",
     "reap_temporaries",
     "untemporary",
     "write_bytes_atomic",
@@ -118,6 +126,36 @@ def reap_temporaries(directory: str | os.PathLike[str]) -> list[Path]:
     return removed
 
 
+class Interrupted(BaseException):
+    """A signal arrived while outputs were being built: unwind, removing the temporaries.
+
+    A ``BaseException``, like ``KeyboardInterrupt``, so that ``except Exception`` does not stop
+    it.
+    """
+
+    def __init__(self, signum: int) -> None:
+        super().__init__(signum)
+        self.signum = signum
+
+
+_pending: list[int] = []  # signals noted in this process and not yet cleared
+
+
+def note_interrupt(signum: int | None) -> None:
+    """Note that signal ``signum`` arrived (no output is committed after it), or with ``None``
+    forget the notes (a new command starts)."""
+    if signum is None:
+        _pending.clear()
+    else:
+        _pending.append(signum)
+
+
+def _commit_allowed() -> None:
+    """Raise :class:`Interrupted` if a signal was noted: its exception may have been lost."""
+    if _pending:
+        raise Interrupted(_pending[0])
+
+
 def _refuse(target: Path, overwrite: bool) -> None:
     if os.path.lexists(target) and not overwrite:
         raise FileExistsError(f"{target}: already exists; refusing to overwrite it")
@@ -147,6 +185,7 @@ def atomic_file(
     tmp = _temporary(target, target.suffix if keep_suffix else "")
     try:
         yield tmp
+        _commit_allowed()
         os.replace(tmp, target)
     except BaseException:
         tmp.unlink(missing_ok=True)
@@ -201,6 +240,7 @@ def atomic_directory(
     tmp.mkdir()
     try:
         yield tmp
+        _commit_allowed()
         if not os.path.lexists(target) or (empty and _is_empty_directory(target)):
             os.replace(tmp, target)  # an empty directory is replaced by rename(2) itself
         elif _exchange(tmp, target):

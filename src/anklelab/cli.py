@@ -69,21 +69,31 @@ def main(
     """anklelab: digital twins, control and identification for ankle actuation platforms."""
 
 
-class _Interrupted(BaseException):
-    """SIGINT or SIGTERM arrived: unwinds the command so that its temporaries are removed."""
-
-    def __init__(self, signum: int) -> None:
-        super().__init__(signum)
-        self.signum = signum
-
-
 _SIGNALS = (signal.SIGINT, signal.SIGTERM)
 
 
 def _interrupt(signum: int, frame: object) -> None:
+    """SIGINT or SIGTERM: unwind the command so that its temporaries are removed; noted too,
+    so that no output is committed if the exception is swallowed (see :mod:`anklelab._atomic`)."""
+    from anklelab._atomic import Interrupted, note_interrupt
+
     for number in _SIGNALS:  # a second signal must not cut the clean-up short
         signal.signal(number, signal.SIG_IGN)
-    raise _Interrupted(signum)
+    note_interrupt(signum)
+    raise Interrupted(signum)
+
+
+def _unraisable(hook: Any) -> Any:
+    """``sys.unraisablehook`` that keeps quiet about :class:`~anklelab._atomic.Interrupted`: a
+    signal handled inside a finaliser cannot unwind from there, and Python would print a
+    traceback; the interruption is noted and stops the next commit instead."""
+    from anklelab._atomic import Interrupted
+
+    def quiet(unraisable: Any) -> None:
+        if not isinstance(unraisable.exc_value, Interrupted):
+            hook(unraisable)
+
+    return quiet
 
 
 def _os_error(exc: OSError) -> str:
@@ -127,15 +137,18 @@ def run() -> None:
     SIGTERM unwind the command, so that its temporary outputs are removed, and exit with
     128 + the signal number.
     """
-    from anklelab._atomic import untemporary
+    from anklelab._atomic import Interrupted, note_interrupt, untemporary
 
+    note_interrupt(None)
     handlers = {}
+    unraisablehook = sys.unraisablehook
     if threading.current_thread() is threading.main_thread():
         handlers = {number: signal.signal(number, _interrupt) for number in _SIGNALS}
+        sys.unraisablehook = _unraisable(unraisablehook)
     code: object = 0
     try:
         code = _command().main(prog_name="anklelab", standalone_mode=False)
-    except _Interrupted as exc:
+    except Interrupted as exc:
         name = signal.Signals(exc.signum).name
         typer.echo(f"error: interrupted by {name}; unfinished outputs were removed", err=True)
         code = 128 + exc.signum
@@ -160,4 +173,5 @@ def run() -> None:
     finally:
         for number, handler in handlers.items():
             signal.signal(number, handler)
+        sys.unraisablehook = unraisablehook
     raise SystemExit(code if isinstance(code, int) else 0)
