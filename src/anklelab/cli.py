@@ -1,57 +1,241 @@
-"""The ``anklelab`` command. Each command group lives in its own module under ``commands``."""
+"""The ``anklelab`` command. Each command group lives in its own module under ``commands``.
+
+The top-level group knows each subcommand's name, where it is defined and its one-line help
+(:data:`COMMANDS`), and imports a command's module only when that command is run or its own
+``--help`` is shown: ``anklelab --help`` imports none of them.
+"""
 
 from __future__ import annotations
 
 import errno
 import functools
+import importlib
 import os
 import signal
 import sys
 import threading
-from typing import Annotated, Any
+from collections.abc import Callable, Iterator, Mapping, MutableMapping
+from typing import Annotated, Any, ClassVar, NamedTuple, cast
 
 import typer
+from typer.core import TyperCommand, TyperGroup
 
 from anklelab import __version__
-from anklelab.commands import (
-    analyze,
-    batch,
-    capstan,
-    demo,
-    design,
-    forceplate,
-    identify,
-    imports,
-    platform,
-    report,
-    session,
-    simulate,
-    study,
-    tree,
-)
 from anklelab.errors import AnklelabError
 
+
+class LazyCommand(NamedTuple):
+    """A subcommand that is imported on first use.
+
+    Attributes
+    ----------
+    target : str
+        ``"module:name"`` of a :class:`typer.Typer` (a group of commands) or of a command
+        function.
+    short_help : str
+        Its line in the parent's ``--help``: the command's own short help as click shows it on a
+        wide terminal (the first sentence of its help). ``tests/test_cli_lazy.py`` checks that it
+        equals the loaded command's, so the two cannot drift apart.
+    """
+
+    target: str
+    short_help: str
+
+
+class LazyCommands(MutableMapping[str, Any]):
+    """A group's name -> click command mapping that imports a lazy command when it is looked up.
+
+    Names, membership and order (the lazy commands in their table's order, then any added
+    eagerly) need no import; ``mapping[name]`` (and so ``get``, ``values`` and ``items``) loads
+    the command once and keeps it.
+
+    Parameters
+    ----------
+    lazy : mapping of str to LazyCommand
+        The lazy commands, in the order they are listed.
+    load : callable
+        ``load(name, entry)`` -> the click command of ``entry``.
+    eager : mapping of str to click command, optional
+        Commands that are already built.
+    """
+
+    def __init__(
+        self,
+        lazy: Mapping[str, LazyCommand],
+        load: Callable[[str, LazyCommand], Any],
+        eager: Mapping[str, Any] | None = None,
+    ) -> None:
+        self._lazy = dict(lazy)
+        self._load = load
+        self._loaded: dict[str, Any] = dict(eager or {})
+
+    def __getitem__(self, name: str) -> Any:
+        if name not in self._loaded:
+            if name not in self._lazy:
+                raise KeyError(name)
+            self._loaded[name] = self._load(name, self._lazy[name])
+        return self._loaded[name]
+
+    def __setitem__(self, name: str, command: Any) -> None:
+        self._loaded[name] = command
+
+    def __delitem__(self, name: str) -> None:
+        if name not in self:
+            raise KeyError(name)
+        self._lazy.pop(name, None)
+        self._loaded.pop(name, None)
+
+    def __contains__(self, name: object) -> bool:
+        return name in self._lazy or name in self._loaded
+
+    def __iter__(self) -> Iterator[str]:
+        yield from self._lazy
+        yield from (name for name in self._loaded if name not in self._lazy)
+
+    def __len__(self) -> int:
+        return len(self._lazy.keys() | self._loaded.keys())
+
+    def listed(self, name: str) -> Any:
+        """The command as the parent's ``--help`` lists it, without importing it.
+
+        Parameters
+        ----------
+        name : str
+            A command name of this mapping.
+
+        Returns
+        -------
+        click command
+            The loaded command if it was loaded, else a stand-in carrying only its short help.
+        """
+        if name in self._loaded:
+            return self._loaded[name]
+        return TyperCommand(name, help=self._lazy[name].short_help)
+
+
+class LazyGroup(TyperGroup):
+    """A typer group whose subcommands (:attr:`lazy`) are imported when first used.
+
+    A subclass sets :attr:`lazy`; pass it as ``typer.Typer(cls=...)``. Looking a command up
+    (:meth:`get_command`, as running it or showing its ``--help`` does) imports its module and
+    converts it as ``app.add_typer``/``app.command`` would have, with this group's markup mode
+    and command suggestions (typer's default ``pretty_exceptions_short``); listing the commands
+    (:meth:`list_commands`, this group's ``--help``) imports nothing.
+    """
+
+    lazy: ClassVar[Mapping[str, LazyCommand]] = {}
+    commands: LazyCommands
+
+    def __init__(self, **attrs: Any) -> None:
+        super().__init__(**attrs)
+        self.commands = LazyCommands(self.lazy, self._load, eager=self.commands)
+
+    def _load(self, name: str, entry: LazyCommand) -> Any:
+        """Import ``entry`` and build its click command, named ``name``."""
+        module, _, attribute = entry.target.partition(":")
+        target = getattr(importlib.import_module(module), attribute)
+        holder = typer.Typer(
+            rich_markup_mode=self.rich_markup_mode,
+            suggest_commands=self.suggest_commands,
+            add_completion=False,
+        )
+        holder.callback()(_no_options)  # a group, as the real parent is
+        if isinstance(target, typer.Typer):
+            holder.add_typer(target, name=name)
+        else:
+            holder.command(name)(target)
+        return cast(TyperGroup, typer.main.get_command(holder)).commands[name]
+
+    def list_commands(self, ctx: Any) -> list[str]:
+        """The command names in the order given (no import)."""
+        return list(self.commands)
+
+    def format_commands(self, ctx: Any, formatter: Any) -> None:
+        """The ``Commands`` section of ``--help``, as typer writes it, from the short helps."""
+        names = self.list_commands(ctx)
+        listing = TyperGroup(commands={name: self.commands.listed(name) for name in names})
+        TyperGroup.format_commands(listing, ctx, formatter)
+
+
+def _no_options() -> None:
+    """The callback of the throwaway parent that :meth:`LazyGroup._load` converts through."""
+
+
+class Anklelab(LazyGroup):
+    """The ``anklelab`` group."""
+
+    lazy: ClassVar[Mapping[str, LazyCommand]] = {
+        "analyze": LazyCommand(
+            "anklelab.commands.analyze:analyze",
+            "Ankle stiffness, damping and inertia per timing point and direction, with bootstrap.",
+        ),
+        "forceplate": LazyCommand(
+            "anklelab.commands.forceplate:forceplate",
+            "Ground reaction force, centre of pressure and free moment, one CSV table per plate.",
+        ),
+        "inspect": LazyCommand(
+            "anklelab.commands.tree:inspect",
+            "Print a file's tree: names, shapes and types, and a C3D file's channels, force "
+            "platforms, events and parameters.",
+        ),
+        "demo": LazyCommand(
+            "anklelab.commands.demo:demo",
+            "Run both papers' experiments on the digital twins and compare with the papers.",
+        ),
+        "report": LazyCommand(
+            "anklelab.commands.report:report",
+            "Build a self-contained report.html (tables and figures, no network) from results.",
+        ),
+        "study": LazyCommand(
+            "anklelab.commands.study:study",
+            "Simulate and analyse every cell of a study (twin settings x analysis settings x "
+            "seeds).",
+        ),
+        "design": LazyCommand(
+            "anklelab.commands.design:design",
+            "Trials per timing point for a stiffness interval of ±X % and the power to detect a "
+            "Y % change between timing points, from pilot sessions of the twin.",
+        ),
+        "batch": LazyCommand(
+            "anklelab.commands.batch:batch",
+            "Analyse every session with the same settings; per-session results and a group table.",
+        ),
+        "platform": LazyCommand(
+            "anklelab.commands.platform:app", "Inspect platform parameter sets and their sources."
+        ),
+        "session": LazyCommand("anklelab.commands.session:app", "Inspect sessions."),
+        "import": LazyCommand(
+            "anklelab.commands.imports:app",
+            "Validate a session and store it as one native HDF5 file: `anklelab import SOURCE "
+            "--out S.h5` for a session directory or MATLAB session file, or from C3D or any "
+            "MATLAB layout through a mapping (subcommands c3d, matlab).",
+        ),
+        "identify": LazyCommand(
+            "anklelab.commands.identify:app", "Identify platform models from recorded data."
+        ),
+        "simulate": LazyCommand(
+            "anklelab.commands.simulate:app", "Simulate experiments on the digital twins."
+        ),
+        "capstan": LazyCommand(
+            "anklelab.commands.capstan:app",
+            "Capstan haptic ankle platform (paper 001) on its twin: gains, set-points, chirp, "
+            "display envelope, torque observer, haptic rendering, terrain scenes, Z-width, "
+            "teleoperation.",
+        ),
+    }
+
+
+COMMANDS = Anklelab.lazy
+"""Every subcommand of ``anklelab``: name -> where it is defined and its one-line help."""
+
 app = typer.Typer(
+    cls=Anklelab,
     help="anklelab: digital twins, control and identification for ankle actuation platforms.",
     no_args_is_help=True,
     pretty_exceptions_enable=False,
     add_completion=False,
     rich_markup_mode=None,
 )
-app.add_typer(platform.app, name="platform")
-app.add_typer(session.app, name="session")
-app.add_typer(imports.app, name="import")
-app.command("analyze")(analyze.analyze)
-app.command("forceplate")(forceplate.forceplate)
-app.command("inspect")(tree.inspect)
-app.add_typer(identify.app, name="identify")
-app.add_typer(simulate.app, name="simulate")
-app.add_typer(capstan.app, name="capstan")
-app.command("demo")(demo.demo)
-app.command("report")(report.report)
-app.command("study")(study.study)
-app.command("design")(design.design)
-app.command("batch")(batch.batch)
 
 
 def _version(value: bool) -> None:
