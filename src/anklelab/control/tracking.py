@@ -23,7 +23,6 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.linalg import expm
-from scipy.signal import ss2tf
 
 from anklelab.control.pid import PIDGains
 from anklelab.errors import ParameterError
@@ -161,6 +160,8 @@ def closed_loop_model(
     big_a[7, 6] = 1.0
     c = np.zeros((1, 8))
     c[0, 0] = 1.0
+    from scipy.signal import ss2tf  # here: importing scipy.signal costs a simulation ~1 s
+
     num, den = ss2tf(big_a, big_b[:, None], c, np.zeros((1, 1)))
     num = np.trim_zeros(np.atleast_1d(num[0]), "f")
     num[np.abs(num) < 1e-14 * np.abs(num).max()] = 0.0
