@@ -93,3 +93,16 @@ def test_the_analysis_of_recorded_data_never_loads_numba_or_the_twins(sessions):
     assert not modules & {*TWINS, *LAB_FORMATS, "anklelab.ident.friction", "matplotlib"}
     figures = loaded("import anklelab.report.figures_walking, anklelab.pipelines.walking")
     assert not figures & {*TWINS, "anklelab.ident.friction"}
+
+
+def test_simulating_the_perturberator_loads_no_signal_processing_or_statistics(tmp_path):
+    """scipy.signal (and scipy.stats, which it imports) cost a second of start-up; only the
+    capstan's tracking model and the analysis use them."""
+    out = tmp_path / "s.h5"
+    modules = loaded(
+        "from anklelab.cli import run; run()",
+        *("simulate", "perturberator", "--out", out, "--trials-per-point", "2"),
+        *("--unperturbed", "4"),
+    )
+    assert out.is_file()
+    assert not modules & {"scipy.signal", "scipy.stats", "matplotlib"}
