@@ -298,3 +298,24 @@ def test_a_bad_study_file_ends_in_one_error_line_and_exit_code_2(tmp_path):
     assert proc.returncode == 2
     assert proc.stderr.strip().splitlines() == [f"error: {bad}: colour: unknown key"]
     assert not (tmp_path / "out").exists()
+
+
+def test_design_table_shows_the_recommended_count_instead_of_a_neighbour(capsys):
+    """The table's geometric rows (2 ... 2n) would put 123 beside a recommended 122: the
+    recommended count takes the place of any row within 10 % of it."""
+    import numpy as np
+
+    from anklelab.commands.design import _print_curve
+
+    n = np.arange(2, 245)
+    curve = {
+        "trials_per_point": n.tolist(),
+        "half_width_percent": (33.0 / np.sqrt(n)).tolist(),
+        "power": np.minimum(1.0, n / 50).tolist(),
+        "recommended": 122,
+        "pilot": {"trials_per_point": [], "half_width_percent": [], "rms_error_percent": []},
+    }
+    _print_curve(curve, "ci95")
+    rows = [line.split() for line in capsys.readouterr().out.splitlines()]
+    counts = [int(row[0]) for row in rows if len(row) >= 3 and row[0].isdigit()]
+    assert 122 in counts and 123 not in counts and counts == sorted(counts)

@@ -128,8 +128,10 @@ def _print_curve(curve: dict, kind: str) -> None:
     for column in ("trials per point", "half-width %", "power %", ""):
         table.add_column(column, justify="right")
     n = np.asarray(curve["trials_per_point"])
-    picks = sorted({*np.unique(np.geomspace(n[0], n[-1], 8).round().astype(int)),
-                    curve["recommended"]})  # fmt: skip
+    best = curve["recommended"]
+    spread = np.unique(np.geomspace(n[0], n[-1], 8).round().astype(int))
+    # the recommended count takes the place of a row within 10 % of it (no 122 beside 123)
+    picks = sorted({*spread[np.abs(spread - best) > 0.1 * best], best})
     for value in picks:
         i = int(np.searchsorted(n, value))
         mark = "recommended" if value == curve["recommended"] else ""
