@@ -55,6 +55,14 @@ class WalkingSettings(Parameters):
         torque ``T`` the plate lags the motor by the coupler's twist ``T / K``, so the filters
         are fed the motor angle minus that twist (see :func:`~.stance.stance_trials`). 0: the
         motor angle is taken as the plate's angle, as in paper 000.
+    force_delay_ms
+        How much later the plate's channels are recorded than the angles, ms: an amplifier's
+        anti-alias low-pass (a 4th-order Butterworth at ``f`` Hz delays by about
+        ``2.61 / (2π f)`` s, 1.04 ms at 400 Hz, as the twin assumes), converter skew. The ankle
+        torque is advanced by it. A delay moves all three estimates (2 ms on the hand-made
+        test session: the stiffness by about 1 %, the inertia by 4-11 %); the analysis does not
+        estimate it, so take it from the recording chain's documentation. 0: paper 000's DAQ,
+        which has no filter.
     window_ms, sensitivity_windows_ms
         Impedance analysis window after the onset and the alternative windows checked.
     offset_reference_ms
@@ -115,6 +123,7 @@ class WalkingSettings(Parameters):
     filter_method: Literal["pinv", "toeplitz"] = "pinv"
     calibration_fit_trial: int = Field(0, ge=0)
     transmission_stiffness_nm_per_rad: float = Field(41252.96, ge=0)  # 12 N·m/arcmin
+    force_delay_ms: float = Field(0.0, ge=0, le=50)
     window_ms: float = Field(100.0, gt=0)
     offset_reference_ms: float | None = Field(None, ge=0)
     sensitivity_windows_ms: tuple[float, ...] = (75.0, 125.0)
