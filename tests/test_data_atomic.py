@@ -73,11 +73,11 @@ def test_overwrite_false_refuses(tmp_path, fmt):
 @pytest.fixture
 def interrupted():
     """A signal noted as the command line's handler notes it; forgotten afterwards."""
-    from anklelab._atomic import note_interrupt
+    from anklelab._atomic import forget_interrupts, note_interrupt
 
     note_interrupt(2)
     yield
-    note_interrupt(None)
+    forget_interrupts()
 
 
 def test_after_an_interrupt_nothing_is_committed(tmp_path, interrupted):

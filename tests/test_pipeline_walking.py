@@ -884,8 +884,8 @@ def _delayed(session, samples):
 
 def test_a_known_force_delay_is_taken_out_of_damping_and_inertia(mini):
     """Force channels recorded 2 ms after the angles (an amplifier's anti-alias filter) move the
-    stiffness by about 1 % and the inertia by several; ``force_delay_ms`` advances the torque
-    and the estimates return to within 1 % of those of the undelayed session."""
+    stiffness by about 1 % and the inertia by several; ``force_delay_ms`` moves the channels
+    back and the estimates return to within 1 % of those of the undelayed session."""
     settings = {"bootstrap_reps": 10, "stiffness_model": "constant", **RIGID}
     clean = analyze_walking(mini.session, WalkingSettings(**settings)).timing_points
     late = _delayed(mini.session, 2)

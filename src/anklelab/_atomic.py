@@ -36,6 +36,7 @@ __all__ = [
     "Interrupted",
     "atomic_directory",
     "atomic_file",
+    "forget_interrupts",
     "is_temporary",
     "note_interrupt",
     "reap_temporaries",
@@ -141,13 +142,14 @@ class Interrupted(BaseException):
 _pending: list[int] = []  # signals noted in this process and not yet cleared
 
 
-def note_interrupt(signum: int | None) -> None:
-    """Note that signal ``signum`` arrived (no output is committed after it), or with ``None``
-    forget the notes (a new command starts)."""
-    if signum is None:
-        _pending.clear()
-    else:
-        _pending.append(signum)
+def note_interrupt(signum: int) -> None:
+    """Note that signal ``signum`` arrived: no output is committed after it."""
+    _pending.append(signum)
+
+
+def forget_interrupts() -> None:
+    """Forget the signals noted so far (a new command starts)."""
+    _pending.clear()
 
 
 def _commit_allowed() -> None:

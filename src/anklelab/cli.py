@@ -321,9 +321,9 @@ def run() -> None:
     SIGTERM unwind the command, so that its temporary outputs are removed, and exit with
     128 + the signal number.
     """
-    from anklelab._atomic import Interrupted, note_interrupt, untemporary
+    from anklelab._atomic import Interrupted, forget_interrupts, untemporary
 
-    note_interrupt(None)
+    forget_interrupts()
     handlers = {}
     unraisablehook = sys.unraisablehook
     if threading.current_thread() is threading.main_thread():

@@ -6,6 +6,7 @@ _EXPORTS = {
     "derivative": "derivatives",
     "kinematics": "derivatives",
     "Trials": "epochs",
+    "advance": "epochs",
     "bootstrap_weights": "epochs",
     "epoch": "epochs",
     "stack_recordings": "epochs",

@@ -18,7 +18,7 @@ from numpy.typing import ArrayLike, NDArray
 from anklelab.data.session import Recording
 from anklelab.errors import ParameterError
 
-__all__ = ["Trials", "bootstrap_weights", "epoch", "stack_recordings"]
+__all__ = ["Trials", "advance", "bootstrap_weights", "epoch", "stack_recordings"]
 
 Seed = int | np.random.Generator | None
 
@@ -255,6 +255,26 @@ def bootstrap_weights(
     weights = np.zeros((int(n_reps), n_trials))
     np.put_along_axis(weights, chosen, 1.0 / size, axis=1)
     return weights
+
+
+def advance(x: ArrayLike, lead: float) -> NDArray[np.float64]:
+    """``x`` moved ``lead`` samples earlier along its last axis: a signal recorded ``lead``
+    samples late, realigned (a fraction of a sample by linear interpolation, accurate for
+    signals well below the sample rate; the last value is held at the end).
+
+    Examples
+    --------
+    >>> advance([0.0, 1.0, 2.0, 3.0], 1.5).tolist()
+    [1.5, 2.5, 3.0, 3.0]
+    """
+    x = np.asarray(x, dtype=float)
+    if lead == 0:
+        return x
+    whole = int(np.floor(lead))
+    last = x.shape[-1] - 1
+    index = np.clip(np.arange(x.shape[-1]) + whole, 0, last)
+    fraction = lead - whole
+    return (1.0 - fraction) * x[..., index] + fraction * x[..., np.minimum(index + 1, last)]
 
 
 def stack_recordings(

@@ -71,7 +71,9 @@ def analyze_walking(
                 f"session is sampled at {fs:g} Hz with channels {plate.signals}"
             )
         check_calibration_lengths(filters, session.calibration, fs)
-        filter_vaf, filter_vaf_by_channel = score_filters(filters, session.calibration, plate)
+        filter_vaf, filter_vaf_by_channel = score_filters(
+            filters, session.calibration, plate, settings.force_delay_samples(fs)
+        )
     report(STEPS[1])
     stance, mislabelled = stance_trials(session, settings, filters)
     unperturbed = stance["none"]

@@ -12,7 +12,7 @@ from anklelab.errors import ParameterError, SessionFormatError
 from anklelab.forceplate import ForcePlate
 from anklelab.ident.irf import PlatformFilters
 from anklelab.pipelines.walking.settings import WalkingSettings
-from anklelab.signals import lowpass_min_samples
+from anklelab.signals import advance, lowpass_min_samples
 
 __all__ = [
     "check_calibration_lengths",
@@ -68,15 +68,17 @@ def fit_platform_filters(
     check_calibration_lengths(filters, calibration, fs)
     fit_rec = calibration[fit_index]
     plate = session.info.force_plate
-    filters.fit(fit_rec["motor_angle"], load_signals(fit_rec, plate), fs=fs)
+    lead = settings.force_delay_samples(fs)
+    filters.fit(fit_rec["motor_angle"], load_signals(fit_rec, plate, lead), fs=fs)
     held_out = [rec for i, rec in enumerate(calibration) if i != fit_index] or [fit_rec]
-    return (filters, *score_filters(filters, held_out, plate))
+    return (filters, *score_filters(filters, held_out, plate, lead))
 
 
-def load_signals(recording: Recording, plate: ForcePlate) -> NDArray[np.float64]:
+def load_signals(recording: Recording, plate: ForcePlate, lead: float = 0.0) -> NDArray[np.float64]:
     """The signals the platform filters model: the plate's channels, or for GRF/COP data the
-    sagittal signals (``plate.signals``), shape ``(n_signals, n_samples)``."""
-    return plate.load_signals(recording.stack(plate.channels))
+    sagittal signals (``plate.signals``), shape ``(n_signals, n_samples)``; moved ``lead``
+    samples earlier when they were recorded that late (``force_delay_ms``)."""
+    return advance(plate.load_signals(recording.stack(plate.channels)), lead)
 
 
 def check_calibration_lengths(
@@ -101,11 +103,15 @@ def check_calibration_lengths(
 
 
 def score_filters(
-    filters: PlatformFilters, recordings: Sequence[Recording], plate: ForcePlate
+    filters: PlatformFilters,
+    recordings: Sequence[Recording],
+    plate: ForcePlate,
+    lead: float = 0.0,
 ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     """Held-out VAF of ``filters`` per recording: pooled ``(n,)`` and per channel
-    ``(n, n_signals)``, %."""
-    scores = [filters.vaf(rec["motor_angle"], load_signals(rec, plate)) for rec in recordings]
+    ``(n, n_signals)``, % (the signals moved ``lead`` samples earlier, see
+    :func:`load_signals`)."""
+    scores = [filters.vaf(rec["motor_angle"], load_signals(rec, plate, lead)) for rec in recordings]
     pooled = np.array([s[0] for s in scores])
     return pooled, np.array([s[1] for s in scores]).reshape(len(scores), len(filters.channels))
 

@@ -58,11 +58,12 @@ class WalkingSettings(Parameters):
     force_delay_ms
         How much later the plate's channels are recorded than the angles, ms: an amplifier's
         anti-alias low-pass (a 4th-order Butterworth at ``f`` Hz delays by about
-        ``2.61 / (2π f)`` s, 1.04 ms at 400 Hz, as the twin assumes), converter skew. The ankle
-        torque is advanced by it. A delay moves all three estimates (2 ms on the hand-made
-        test session: the stiffness by about 1 %, the inertia by 4-11 %); the analysis does not
-        estimate it, so take it from the recording chain's documentation. 0: paper 000's DAQ,
-        which has no filter.
+        ``2.61 / (2π f)`` s, 1.04 ms at 400 Hz, as the twin assumes), converter skew. The
+        plate's signals (calibration and walking) are moved that much earlier before anything
+        else. A delay moves all three estimates (2 ms on the hand-made test session: the
+        stiffness by about 1 %, the inertia by 4-11 %); the analysis does not estimate it, so
+        take it from the recording chain's documentation. 0: paper 000's DAQ, which has no
+        filter.
     window_ms, sensitivity_windows_ms
         Impedance analysis window after the onset and the alternative windows checked.
     offset_reference_ms
@@ -157,6 +158,10 @@ class WalkingSettings(Parameters):
     def windows_ms(self) -> tuple[float, ...]:
         """The analysis window followed by the sensitivity windows, ms."""
         return (self.window_ms, *(w for w in self.sensitivity_windows_ms if w != self.window_ms))
+
+    def force_delay_samples(self, fs: float) -> float:
+        """``force_delay_ms`` in samples at ``fs`` Hz (a fraction of a sample allowed)."""
+        return self.force_delay_ms * fs / 1000.0
 
     def offset_reference(self) -> float:
         """How long before each onset the offsets are read, ms: ``offset_reference_ms`` if set,

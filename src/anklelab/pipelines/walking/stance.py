@@ -27,6 +27,7 @@ from anklelab.ident.irf import PlatformFilters
 from anklelab.pipelines.walking.settings import WalkingSettings
 from anklelab.signals import (
     Trials,
+    advance,
     epoch,
     heel_contact,
     kinematics,
@@ -160,7 +161,8 @@ def stance_trials(
     # the plate's signals that are linear in the load (its channels, or for GRF/COP data the
     # sagittal signals); they, the motor and the ankle angle are zeroed over the baseline (the
     # ankle angle is re-zeroed later)
-    signals = np.concatenate([raw[:, :2], plate.load_signals(raw[:, 2:])], axis=1)
+    load = advance(plate.load_signals(raw[:, 2:]), settings.force_delay_samples(fs))
+    signals = np.concatenate([raw[:, :2], load], axis=1)
     signals -= signals[..., :n_base].mean(axis=-1, keepdims=True)
     motor, ankle_raw = signals[:, 0], signals[:, 1]
     sagittal = sagittal_matrix(plate)
@@ -211,8 +213,6 @@ def stance_trials(
         # calibration excites, and T's content near the cut-off, fed to them unfiltered,
         # wrecked sessions with a stiff foot (walking-analysis guide)
         grf_z, torque, dx = foot_load(motor - np.nan_to_num(torque) / stiffness)
-    if settings.force_delay_ms:  # the channels were recorded this much after the angles
-        torque = _advanced(torque, settings.force_delay_ms * fs / 1000.0)
     ankle = lowpass(ankle_raw, **lp)
     kin = kinematics(ankle - ankle[rows, event][:, None], fs, settings.derivative_window)
 
@@ -338,15 +338,6 @@ def _cop_at_contact(
         gram[singular] = np.eye(degree + 1)
         coef = np.linalg.solve(gram, rhs[..., None])[..., 0]
     return np.where(singular, np.nan, coef[:, 0])
-
-
-def _advanced(x: NDArray[np.float64], lead: float) -> NDArray[np.float64]:
-    """``x`` moved ``lead`` samples earlier along its last axis (a fraction by linear
-    interpolation, accurate for a low-passed signal; the last value held at the end)."""
-    whole = int(np.floor(lead))
-    index = np.minimum(np.arange(x.shape[-1]) + whole, x.shape[-1] - 1)
-    fraction = lead - whole
-    return (1.0 - fraction) * x[..., index] + fraction * x[..., np.minimum(index + 1, index[-1])]
 
 
 def samples(ms: float, fs: float) -> int:
