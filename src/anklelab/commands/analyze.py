@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import contextlib
 import csv
 import io
 import json
@@ -28,6 +29,7 @@ from anklelab.commands._progress_bars import recording_progress
 if TYPE_CHECKING:
     from anklelab.data.session import Session
     from anklelab.pipelines.walking import WalkingResults
+    from anklelab.report.render import FigureRenderer
 
 __all__ = ["analyze", "trials_table", "write_csv"]
 
@@ -111,6 +113,15 @@ def _poorly_determined(results: WalkingResults) -> str:
     return ", ".join(f"{name} at {k} of {n} points" for name, k in counts.items() if k)
 
 
+def _renderer(figures: bool) -> FigureRenderer | contextlib.nullcontext[None]:
+    """Figure workers, started now so that they import matplotlib while the analysis runs."""
+    if not figures:
+        return contextlib.nullcontext()
+    from anklelab.report.render import FigureRenderer
+
+    return FigureRenderer(["anklelab.report.figures_walking"])
+
+
 def analyze(
     session_path: SessionArgument,
     out: Annotated[Path, typer.Option("--out", "-o", help="Directory for results and figures.")],
@@ -147,6 +158,7 @@ def analyze(
     filters = PlatformFilters.load(filters_file) if filters_file else None
     inputs = [p for p in (session_path, settings_file, filters_file) if p is not None]
     with (
+        _renderer(figures) as renderer,
         output_directory(out, command="analyze", force=force, inputs=inputs) as run,
         recording_progress() as task,
     ):
@@ -171,7 +183,7 @@ def analyze(
         if figures:
             from anklelab.report.figures_walking import save_walking_figures
 
-            save_walking_figures(results, run.directory)
+            save_walking_figures(results, run.directory, renderer)
         run.settings.update(settings.model_dump(mode="json"), figures=figures)
         run.add_input(session_path, sha256)
         run.add_input(settings_file)

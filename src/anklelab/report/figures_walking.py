@@ -17,7 +17,7 @@ import numpy as np
 
 from anklelab._atomic import write_bytes_atomic
 from anklelab.report.figures_impedance import impedance_figure
-from anklelab.report.html import figure_png
+from anklelab.report.render import FigureRenderer
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
@@ -26,10 +26,12 @@ if TYPE_CHECKING:
     from anklelab.pipelines.walking import WalkingResults
 
 __all__ = [
+    "WALKING_FIGURES",
     "filters_figure",
     "model_fit_figure",
     "save_walking_figures",
     "stance_figure",
+    "walking_figure",
     "walking_figures",
 ]
 
@@ -196,22 +198,47 @@ def model_fit_figure(results: WalkingResults) -> Figure:
     return fig
 
 
+WALKING_FIGURES = (
+    "impedance_summary",
+    "filters",
+    "stance_profiles",
+    "model_fit",
+    "impedance_vs_lever_arm",
+)
+"""Every walking figure's name (its file stem), in report order."""
+
+
+def walking_figure(results: WalkingResults, name: str) -> Figure:
+    """The walking figure called ``name`` (one of :data:`WALKING_FIGURES`)."""
+    if name == "impedance_summary":
+        return impedance_figure(results)
+    if name == "impedance_vs_lever_arm":
+        return impedance_figure(results, x="lever_arm")
+    if name == "filters":
+        return filters_figure(results.filters)
+    if name == "stance_profiles":
+        return stance_figure(results)
+    if name == "model_fit":
+        return model_fit_figure(results)
+    raise ValueError(f"name: expected one of {', '.join(WALKING_FIGURES)}, got {name!r}")
+
+
 def walking_figures(results: WalkingResults) -> dict[str, Figure]:
     """Every walking figure, by file stem."""
-    return {
-        "impedance_summary": impedance_figure(results),
-        "filters": filters_figure(results.filters),
-        "stance_profiles": stance_figure(results),
-        "model_fit": model_fit_figure(results),
-        "impedance_vs_lever_arm": impedance_figure(results, x="lever_arm"),
-    }
+    return {name: walking_figure(results, name) for name in WALKING_FIGURES}
 
 
-def save_walking_figures(results: WalkingResults, directory: str | Path) -> list[Path]:
-    """Write every walking figure as ``DIRECTORY/<name>.png`` (atomically); returns the paths."""
+def save_walking_figures(
+    results: WalkingResults, directory: str | Path, renderer: FigureRenderer | None = None
+) -> list[Path]:
+    """Write every walking figure as ``DIRECTORY/<name>.png`` (atomically); returns the paths.
+
+    ``renderer`` draws them in its worker processes (see :class:`~.render.FigureRenderer`);
+    without one they are drawn here, one after another.
+    """
     directory = Path(directory)
     directory.mkdir(parents=True, exist_ok=True)
-    return [
-        write_bytes_atomic(directory / f"{name}.png", figure_png(fig))
-        for name, fig in walking_figures(results).items()
-    ]
+    pngs = (renderer or FigureRenderer(processes=1)).render(
+        walking_figure, results, WALKING_FIGURES
+    )
+    return [write_bytes_atomic(directory / f"{name}.png", png) for name, png in pngs.items()]

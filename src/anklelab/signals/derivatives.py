@@ -2,13 +2,13 @@
 
 A least-squares polynomial fitted to ``window`` samples centred on each time point and
 differentiated there is exactly a Savitzky-Golay filter, so the work is one FIR per derivative.
+SciPy's signal package is imported on first use (see :mod:`anklelab.signals.filters`).
 """
 
 from __future__ import annotations
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
-from scipy.signal import savgol_filter
 
 from anklelab.errors import ParameterError
 
@@ -63,6 +63,8 @@ def derivative(
     >>> bool(np.allclose(derivative(3.0 * t**2, 100.0, deriv=2), 6.0))
     True
     """
+    from scipy.signal import savgol_filter
+
     _check_window(window, polyorder)
     return savgol_filter(
         x, int(window), polyorder, deriv=deriv, delta=1.0 / fs, axis=axis, mode="interp"

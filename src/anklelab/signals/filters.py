@@ -1,4 +1,8 @@
-"""Zero-phase low-pass filtering (paper 000, section 2.4.2: bidirectional Butterworth)."""
+"""Zero-phase low-pass filtering (paper 000, section 2.4.2: bidirectional Butterworth).
+
+SciPy's signal package is imported on the first filter (it costs about 0.8 s of start-up), so
+a process that only handles results or figures never loads it.
+"""
 
 from __future__ import annotations
 
@@ -6,7 +10,6 @@ from functools import lru_cache
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
-from scipy.signal import butter, sosfiltfilt
 
 from anklelab.errors import ParameterError
 
@@ -15,6 +18,8 @@ __all__ = ["lowpass", "lowpass_min_samples"]
 
 @lru_cache(maxsize=32)
 def _butter_sos(order: int, cutoff_hz: float, fs: float) -> NDArray[np.float64]:
+    from scipy.signal import butter
+
     return butter(order, cutoff_hz, btype="low", output="sos", fs=fs)
 
 
@@ -108,4 +113,6 @@ def lowpass(
             f"{order}, cutoff {cutoff_hz:g} Hz) needs at least {padlen + 1} (it pads each end "
             f"with padlen = {padlen} samples)"
         )
+    from scipy.signal import sosfiltfilt
+
     return sosfiltfilt(sos, x, axis=axis)

@@ -1,0 +1,117 @@
+"""Figures rendered to PNG in worker processes that start before the results they draw exist.
+
+A command that ends in figures spends most of its time in matplotlib: importing it (about 0.7 s)
+and laying out and drawing every panel (0.5-1 s per walking figure). The analysis before it is
+single-threaded. :class:`FigureRenderer` therefore starts its workers first: while the caller
+computes, they import matplotlib and the figure modules on the cores the analysis leaves idle.
+Given the results, they render one figure per task, in parallel, and return PNG bytes.
+
+Workers are spawned (a fresh interpreter, never a fork of a process whose threads may hold
+locks) and ignore Ctrl-C, which the command handles: leaving the ``with`` block, on success or
+on error, shuts them down. With one usable core everything is drawn in the calling process.
+"""
+
+from __future__ import annotations
+
+import importlib
+import os
+import signal
+from collections.abc import Callable, Sequence
+from concurrent.futures import ProcessPoolExecutor
+from multiprocessing import get_context
+from types import TracebackType
+from typing import Any, TypeVar
+
+from anklelab.report.html import figure_png
+
+__all__ = ["FigureRenderer"]
+
+T = TypeVar("T")
+
+_MAX_PROCESSES = 4
+"""More workers than this would only add start-up work: a command draws at most a few figures."""
+
+
+def _prepare_worker(modules: Sequence[str]) -> None:
+    signal.signal(signal.SIGINT, signal.SIG_IGN)  # the command's process handles Ctrl-C
+    for module in ("matplotlib.figure", "matplotlib.backends.backend_agg", *modules):
+        importlib.import_module(module)
+
+
+def _ready() -> None:
+    """A task that only makes the pool start a worker now."""
+
+
+def _png(draw: Callable[[T, str], Any], data: T, name: str) -> bytes:
+    return figure_png(draw(data, name))
+
+
+def _usable_cores() -> int:
+    try:
+        return len(os.sched_getaffinity(0))
+    except AttributeError:  # not on Linux
+        return os.cpu_count() or 1
+
+
+class FigureRenderer:
+    """Render named figures to PNG bytes, in parallel worker processes started ahead of need.
+
+    Parameters
+    ----------
+    modules : sequence of str
+        Modules each worker imports on start (those defining the figure functions, and the
+        classes of the data they draw), besides matplotlib.
+    processes : int, optional
+        Worker processes; by default one per usable core, at most 4. With 1 (or a single-core
+        machine) figures are drawn in the calling process and nothing is started.
+
+    Examples
+    --------
+    >>> from anklelab.report.figures_walking import walking_figure
+    >>> with FigureRenderer(["anklelab.report.figures_walking"]) as renderer:  # doctest: +SKIP
+    ...     results = analyze_walking(session)  # the workers import matplotlib meanwhile
+    ...     pngs = renderer.render(walking_figure, results, ["filters", "model_fit"])
+    """
+
+    def __init__(self, modules: Sequence[str] = (), processes: int | None = None) -> None:
+        self.processes = min(_usable_cores(), _MAX_PROCESSES) if processes is None else processes
+        self._pool: ProcessPoolExecutor | None = None
+        if self.processes > 1:
+            self._pool = ProcessPoolExecutor(
+                self.processes,
+                mp_context=get_context("spawn"),
+                initializer=_prepare_worker,
+                initargs=(tuple(modules),),
+            )
+            for _ in range(self.processes):  # the pool starts a worker per pending task
+                self._pool.submit(_ready)
+
+    def render(
+        self, draw: Callable[[T, str], Any], data: T, names: Sequence[str]
+    ) -> dict[str, bytes]:
+        """PNG bytes of ``draw(data, name)`` for every name, in the order given.
+
+        ``draw`` must be a module-level function and ``data`` picklable (each task sends them to
+        a worker). An exception raised while drawing is raised here, with its traceback.
+        """
+        if self._pool is None:
+            return {name: _png(draw, data, name) for name in names}
+        tasks = {name: self._pool.submit(_png, draw, data, name) for name in names}
+        return {name: task.result() for name, task in tasks.items()}
+
+    def close(self) -> None:
+        """Stop the workers (waiting for any task they are running); idempotent."""
+        if self._pool is not None:
+            self._pool.shutdown(wait=True, cancel_futures=True)
+            self._pool = None
+
+    def __enter__(self) -> FigureRenderer:
+        return self
+
+    def __exit__(
+        self,
+        kind: type[BaseException] | None,
+        error: BaseException | None,
+        traceback: TracebackType | None,
+    ) -> None:
+        self.close()

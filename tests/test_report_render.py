@@ -1,0 +1,56 @@
+"""Figures rendered in worker processes are the figures drawn in the calling process."""
+
+import hashlib
+
+import pytest
+from matplotlib.figure import Figure
+
+from anklelab.report.render import FigureRenderer
+
+
+def draw(size: float, name: str) -> Figure:
+    """A small figure titled ``name`` (module level: the workers import it from here)."""
+    if name == "broken":
+        raise ValueError("no such figure: broken")
+    fig = Figure(figsize=(size, size), layout="constrained")
+    ax = fig.subplots()
+    ax.plot([0, 1, 2], [0, len(name), 1])
+    ax.set_title(name)
+    return fig
+
+
+NAMES = ["one", "two", "three"]
+
+
+def test_workers_render_the_same_pngs_as_the_calling_process():
+    serial = FigureRenderer(processes=1)
+    assert serial.processes == 1 and serial._pool is None  # nothing is started
+    expected = serial.render(draw, 2.0, NAMES)
+    with FigureRenderer([__name__], processes=2) as renderer:
+        rendered = renderer.render(draw, 2.0, NAMES)
+    assert list(rendered) == NAMES
+    assert rendered == expected
+    assert all(png.startswith(b"\x89PNG") for png in rendered.values())
+    assert len({hashlib.sha256(png).digest() for png in rendered.values()}) == len(NAMES)
+
+
+def test_a_figure_that_fails_to_draw_raises_in_the_caller_and_the_workers_stop():
+    renderer = FigureRenderer([__name__], processes=2)
+    with renderer, pytest.raises(ValueError, match="no such figure: broken"):
+        renderer.render(draw, 2.0, ["one", "broken"])
+    assert renderer._pool is None
+    renderer.close()  # idempotent
+
+
+def test_the_walking_figures_saved_by_workers_match_those_drawn_here(tmp_path):
+    from anklelab.experiments import simulate_perturberator
+    from anklelab.pipelines import WalkingSettings, analyze_walking
+    from anklelab.report.figures_walking import WALKING_FIGURES, save_walking_figures
+
+    session = simulate_perturberator(trials_per_point=4, n_unperturbed=8, n_calibration=2, seed=3)
+    results = analyze_walking(session, WalkingSettings(bootstrap_reps=5))
+    here = save_walking_figures(results, tmp_path / "here")
+    with FigureRenderer(["anklelab.report.figures_walking"], processes=2) as renderer:
+        there = save_walking_figures(results, tmp_path / "workers", renderer)
+    assert [p.stem for p in there] == list(WALKING_FIGURES)
+    assert [p.read_bytes() for p in there] == [p.read_bytes() for p in here]
