@@ -1,87 +1,46 @@
 """Controllers, trajectories, observers and safety limits (DESIGN.md section 2, ``control``).
 
-The servo-loop measurement tools (:mod:`anklelab.control.servo`) load on first use: they need
-``scipy.signal``, which would otherwise cost every simulation a second of imports.
+Each name loads its module on first use: the servo-loop measurement tools
+(:mod:`anklelab.control.servo`) need ``scipy.signal``, and a simulation of the perturberator
+needs neither the haptics nor the observer.
 """
 
-from importlib import import_module
-from typing import Any
+from anklelab._lazy import lazy_exports
 
-from anklelab.control.haptics import (
-    TerrainProfile,
-    VirtualEnvironment,
-    admittance_update,
-    impedance_torque,
-)
-from anklelab.control.motion_plan import StepDirectionPlan
-from anklelab.control.observer import (
-    DisturbanceObserver,
-    observer_constants,
-    observer_update,
-)
-from anklelab.control.perturbation import RampHold, calibration_schedule
-from anklelab.control.pid import (
-    PIDGains,
-    PositionController,
-    control_constants,
-    design_critically_damped,
-    position_control_update,
-)
-from anklelab.control.safety import (
-    Fault,
-    SafetyLimits,
-    SafetyMonitor,
-    new_safety_state,
-    safety_update,
-)
-from anklelab.control.trigger import (
-    onset_updates,
-    reading_limits,
-    screen_readings,
-    trigger_updates,
-)
-
-__all__ = [
-    "CascadeGains",
-    "DisturbanceObserver",
-    "Fault",
-    "LoopMargins",
-    "PIDGains",
-    "PositionController",
-    "RampHold",
-    "SafetyLimits",
-    "SafetyMonitor",
-    "StepDirectionPlan",
-    "TerrainProfile",
-    "VirtualEnvironment",
-    "admittance_update",
-    "bandwidth_hz",
-    "calibration_schedule",
-    "control_constants",
-    "design_critically_damped",
-    "fit_second_order",
-    "impedance_torque",
-    "loop_margins",
-    "new_safety_state",
-    "observer_constants",
-    "observer_update",
-    "onset_updates",
-    "periodic_frf",
-    "phase_crossing_hz",
-    "position_control_update",
-    "prbs",
-    "reading_limits",
-    "safety_update",
-    "screen_readings",
-    "second_order_response",
-    "trigger_updates",
-]
-
-
-def __getattr__(name: str) -> Any:
-    """The servo-loop tools (the names of :mod:`anklelab.control.servo`), loaded on first use."""
-    if not name.startswith("_"):  # introspection (``__wrapped__``...) never loads SciPy
-        servo = import_module("anklelab.control.servo")  # not `from . import`: that recurses
-        if name in servo.__all__:
-            return getattr(servo, name)
-    raise AttributeError(f"module 'anklelab.control' has no attribute {name!r}")
+_EXPORTS = {
+    "TerrainProfile": "haptics",
+    "VirtualEnvironment": "haptics",
+    "admittance_update": "haptics",
+    "impedance_torque": "haptics",
+    "StepDirectionPlan": "motion_plan",
+    "DisturbanceObserver": "observer",
+    "observer_constants": "observer",
+    "observer_update": "observer",
+    "RampHold": "perturbation",
+    "calibration_schedule": "perturbation",
+    "PIDGains": "pid",
+    "PositionController": "pid",
+    "control_constants": "pid",
+    "design_critically_damped": "pid",
+    "position_control_update": "pid",
+    "Fault": "safety",
+    "SafetyLimits": "safety",
+    "SafetyMonitor": "safety",
+    "new_safety_state": "safety",
+    "safety_update": "safety",
+    "CascadeGains": "servo",
+    "LoopMargins": "servo",
+    "bandwidth_hz": "servo",
+    "fit_second_order": "servo",
+    "loop_margins": "servo",
+    "periodic_frf": "servo",
+    "phase_crossing_hz": "servo",
+    "prbs": "servo",
+    "second_order_response": "servo",
+    "onset_updates": "trigger",
+    "reading_limits": "trigger",
+    "screen_readings": "trigger",
+    "trigger_updates": "trigger",
+}
+__all__ = sorted(_EXPORTS)
+__getattr__, __dir__ = lazy_exports(__name__, _EXPORTS)

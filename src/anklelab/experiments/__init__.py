@@ -1,37 +1,30 @@
-"""Protocol runners: drive the digital twins through experiments."""
+"""Protocol runners: drive the digital twins through experiments.
 
-from anklelab.data.capstan_ident import IdentData, read_ident_directory, write_ident_directory
-from anklelab.experiments.capstan import (
-    CapstanSetup,
-    FaultInjection,
-    IdentProtocol,
-    chirp_tracking,
-    observer_trial,
-    render,
-    simulate_closed_loop,
-    simulate_ident,
-    step_response,
-)
-from anklelab.experiments.perturberator import TrialFault, simulate_perturberator
-from anklelab.experiments.randomised import KINDS, TwinDraw, draw_twin, simulate_randomised
+Each name loads its module on first use: simulating the perturberator never imports the
+capstan's experiments or controllers.
+"""
 
-__all__ = [
-    "KINDS",
-    "CapstanSetup",
-    "FaultInjection",
-    "IdentData",
-    "IdentProtocol",
-    "TrialFault",
-    "TwinDraw",
-    "chirp_tracking",
-    "draw_twin",
-    "observer_trial",
-    "read_ident_directory",
-    "render",
-    "simulate_closed_loop",
-    "simulate_ident",
-    "simulate_perturberator",
-    "simulate_randomised",
-    "step_response",
-    "write_ident_directory",
-]
+from anklelab._lazy import lazy_exports
+
+_EXPORTS = {
+    "IdentData": "anklelab.data.capstan_ident",
+    "read_ident_directory": "anklelab.data.capstan_ident",
+    "write_ident_directory": "anklelab.data.capstan_ident",
+    "CapstanSetup": "capstan",
+    "FaultInjection": "capstan",
+    "IdentProtocol": "capstan",
+    "chirp_tracking": "capstan",
+    "observer_trial": "capstan",
+    "render": "capstan",
+    "simulate_closed_loop": "capstan",
+    "simulate_ident": "capstan",
+    "step_response": "capstan",
+    "TrialFault": "perturberator",
+    "simulate_perturberator": "perturberator",
+    "KINDS": "randomised",
+    "TwinDraw": "randomised",
+    "draw_twin": "randomised",
+    "simulate_randomised": "randomised",
+}
+__all__ = sorted(_EXPORTS)
+__getattr__, __dir__ = lazy_exports(__name__, _EXPORTS)
