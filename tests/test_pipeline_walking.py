@@ -329,6 +329,7 @@ def test_results_document_has_exactly_the_contract_keys(analysed):
         "stiffness_change_fraction",
         "stiffness_model",
         "stiffness_changes",
+        "stiffness_change_probability",
         "window_sensitivity",
         "adjustment_explained",
     }
@@ -800,7 +801,8 @@ def test_twin_human_ankle_constant_model_warns_of_the_rising_stiffness(human_ses
         (message,) = [m for m in tp.warnings if "changes within" in m]
         assert re.fullmatch(
             rf"{direction}/225: the stiffness changes within the 100 ms window by \+\d+% \(95 % "
-            r"interval \+\d+% to \+\d+%\); .*consider stiffness_model = \"auto\" or \"linear\"",
+            r"interval \+\d+% to \+\d+%, probability \d+% that it exceeds ±20%\); "
+            r".*consider stiffness_model = \"auto\" or \"linear\"",
             message,
         ), message
         late = next(t for t in result.timing_points if t.key == f"{direction}/475")

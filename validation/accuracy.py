@@ -126,7 +126,12 @@ def _change(tp: dict[str, Any]) -> dict[str, Any]:
     """The estimated change of the stiffness over the window, with its interval."""
     change = tp.get("stiffness_change_fraction") or {}
     low, high = change.get("ci95") or ("", "")
-    return {"change": change.get("mean", ""), "change_low": low, "change_high": high}
+    return {
+        "change": change.get("mean", ""),
+        "change_low": low,
+        "change_high": high,
+        "change_probability": tp.get("stiffness_change_probability", ""),
+    }
 
 
 def _draw(truth: dict[str, Any]) -> dict[str, Any]:

@@ -21,7 +21,11 @@ precise); the linear one wherever the change biases the constant fit by more tha
 
 **The diagnostic.** The linear model is always fitted; ``k₁ W / k`` is the change of the
 stiffness over the window ``W`` as a fraction of it, with its interval. The stiffness is said to
-change within the window when that interval lies wholly beyond ``change_threshold``.
+change within the window when the change lies beyond ±``change_threshold`` with a probability
+of at least ``change_confidence`` (Student's t about the estimate, with the standard error
+behind its interval). Requiring the whole 95 % interval beyond the threshold missed half the
+changes of 25 % or more on the randomised twin, where 40 trials per point and thrice the noise
+leave the change's interval ±15 % wide.
 """
 
 from __future__ import annotations
@@ -30,7 +34,7 @@ from dataclasses import replace
 
 import numpy as np
 from numpy.typing import NDArray
-from scipy.special import stdtrit
+from scipy.special import stdtr, stdtrit
 
 from anklelab.ident.impedance import ImpedanceFit, fit_impedance, impedance_torque
 from anklelab.pipelines.walking.responses import RESPONSE, Responses
@@ -145,6 +149,18 @@ def _estimate(
     return Estimate(centre, sd(subsets), (centre - half, centre + half), subsets)
 
 
+def _beyond(estimate: Estimate, threshold: float, n_trials: int) -> float:
+    """Probability that the quantity lies beyond ±``threshold`` on its estimate's side:
+    Student's t (``n_trials - 1`` degrees of freedom) about the estimate, with the standard error
+    its 95 % interval was built from (NaN without an interval)."""
+    low, high = estimate.ci95
+    if n_trials < 2 or not (np.isfinite(low) and np.isfinite(high)):
+        return np.nan
+    se = (high - low) / 2 / stdtrit(n_trials - 1, 0.975)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return float(stdtr(n_trials - 1, (abs(estimate.mean) - threshold) / se))
+
+
 def estimate_timing_point(
     responses: Responses,
     key: str,
@@ -195,9 +211,8 @@ def estimate_timing_point(
     window_s = n / fs
     change = linear.stiffness_slope[0] * window_s / linear.stiffness[0]
     change_estimate = _estimate(change, reps, paper, len(trials))
-    low, high = change_estimate.ci95
-    threshold = settings.change_threshold
-    changes = bool(low > threshold or high < -threshold)
+    probability = _beyond(change_estimate, settings.change_threshold, len(trials))
+    changes = probability >= settings.change_confidence
     full = averages[_FULL : _FULL + 1]
     by_window = _fit(full, lengths[1:], model, fs) if len(lengths) > 1 else None
     shift = round(settings.timing_uncertainty_ms * fs / 1000.0)
@@ -214,7 +229,7 @@ def estimate_timing_point(
     analysis = ImpedanceFit(*(values[0][paper] for values in chosen))
     subset_avg = averages[paper]
     weight = averages[_FULL, RESPONSE.index("angle"), :n] ** 2
-    warnings = _warnings(key, estimates, change_estimate, changes, model, window_s)
+    warnings = _warnings(key, estimates, change_estimate, probability, settings, model, window_s)
     return TimingPoint(
         delay_ms=float(key.split("/")[1]),
         direction=key.split("/")[0],
@@ -225,6 +240,7 @@ def estimate_timing_point(
         stiffness_model=model,
         stiffness_change=change_estimate,
         stiffness_changes=changes,
+        stiffness_change_probability=probability,
         stiffness_slope=(
             _estimate(linear.stiffness_slope[0], reps, paper, len(trials))
             if model == "linear"
@@ -249,7 +265,8 @@ def _warnings(
     key: str,
     estimates: dict[str, Estimate],
     change: Estimate,
-    changes: bool,
+    probability: float,
+    settings: WalkingSettings,
     model: str,
     window_s: float,
 ) -> tuple[str, ...]:
@@ -264,10 +281,12 @@ def _warnings(
             f"[{e.ci95[0]:.3g}, {e.ci95[1]:.3g}] around {e.mean:.3g}; do not read it as a "
             "precise number"
         )
-    if changes and model == "constant":
+    threshold = settings.change_threshold
+    if probability >= settings.change_confidence and model == "constant":
         out.append(
             f"{key}: the stiffness changes within the {window_s * 1000:g} ms window by "
-            f"{change.mean:+.0%} (95 % interval {change.ci95[0]:+.0%} to {change.ci95[1]:+.0%}); "
+            f"{change.mean:+.0%} (95 % interval {change.ci95[0]:+.0%} to {change.ci95[1]:+.0%}, "
+            f"probability {probability:.0%} that it exceeds ±{threshold:.0%}); "
             "a constant stiffness lets damping and inertia absorb the change: consider "
             'stiffness_model = "auto" or "linear"'
         )

@@ -139,9 +139,12 @@ class TimingPoint:
         the linear model (always fitted).
     stiffness_changes : bool
         The diagnostic: the stiffness changes within the window by more than
-        ``change_threshold`` (its interval lies beyond it).
+        ``change_threshold``, with a probability of at least ``change_confidence``.
     stiffness_slope : Estimate or None
         ``k₁``, N·m/rad/s, when the linear model is used.
+    stiffness_change_probability : float
+        The diagnostic's probability that the change lies beyond ±``change_threshold`` (NaN
+        in files written before it existed).
     window_stiffness : dict of str to float
         Stiffness for each sensitivity window (key: window in ms, ``"75"``), N·m/rad.
     adjustment_explained : float
@@ -168,6 +171,7 @@ class TimingPoint:
     stiffness_change: Estimate
     stiffness_changes: bool
     stiffness_slope: Estimate | None = None
+    stiffness_change_probability: float = np.nan
     window_stiffness: dict[str, float] = field(default_factory=dict)
     adjustment_explained: float = 0.0
     warnings: tuple[str, ...] = ()
@@ -201,6 +205,7 @@ class TimingPoint:
             **{q.key: e.to_dict() for q, e in self.estimates().items()},
             "stiffness_model": self.stiffness_model,
             "stiffness_changes": self.stiffness_changes,
+            "stiffness_change_probability": self.stiffness_change_probability,
             "window_sensitivity": {
                 key: {"stiffness_nm_per_rad": value} for key, value in self.window_stiffness.items()
             },
@@ -232,6 +237,7 @@ class TimingPoint:
                 stiffness_slope=Estimate.from_dict(slope, f"{where}.{SLOPE.key}")
                 if slope
                 else None,
+                stiffness_change_probability=_float(node.get("stiffness_change_probability")),
                 window_stiffness={
                     key: float(value["stiffness_nm_per_rad"])
                     for key, value in node.get("window_sensitivity", {}).items()
@@ -378,6 +384,7 @@ class WalkingResults:
                 row[f"{quantity.key}_ci95_low"], row[f"{quantity.key}_ci95_high"] = estimate.ci95
                 row[f"{quantity.key}_poorly_determined"] = int(estimate.poorly_determined)
             row["stiffness_changes"] = int(tp.stiffness_changes)
+            row["stiffness_change_probability"] = tp.stiffness_change_probability
             for key, value in tp.window_stiffness.items():
                 row[f"stiffness_nm_per_rad_{key}ms"] = value
             match = check.get(tp.delay_ms) if tp.direction == "dorsi" else None
