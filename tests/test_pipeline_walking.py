@@ -903,3 +903,20 @@ def test_a_known_force_delay_is_taken_out_of_damping_and_inertia(mini):
         assert delayed_by.mean() > share * truth, (name, delayed_by / truth)
         assert delayed_by.mean() > 5 * fixed_by.mean(), (name, delayed_by, fixed_by)
         assert fixed_by.max() < 0.01 * truth, (name, fixed_by / truth)
+
+
+def test_the_change_probability_is_students_t_about_the_estimate():
+    """P(change beyond ±threshold on the estimate's side), t with n - 1 degrees of freedom and
+    the standard error the interval was built from; NaN without an interval."""
+    from scipy.special import stdtr, stdtrit
+
+    from anklelab.pipelines.walking.impedance import _beyond
+    from anklelab.pipelines.walking.results import Estimate
+
+    half = stdtrit(10, 0.975) * 0.1  # a standard error of 0.1 with 11 trials
+    for sign in (1.0, -1.0):
+        estimate = Estimate(sign * 0.3, 0.0, (sign * 0.3 - half, sign * 0.3 + half))
+        assert _beyond(estimate, 0.2, 11) == pytest.approx(stdtr(10, 1.0))
+        assert _beyond(estimate, 0.4, 11) == pytest.approx(stdtr(10, -1.0))
+    assert np.isnan(_beyond(Estimate(0.3, 0.0, (np.nan, np.nan)), 0.2, 11))
+    assert np.isnan(_beyond(Estimate(0.3, 0.0, (0.1, 0.5)), 0.2, 1))

@@ -1,6 +1,7 @@
 """Figures rendered in worker processes are the figures drawn in the calling process."""
 
 import hashlib
+import os
 
 import pytest
 from matplotlib.figure import Figure
@@ -17,6 +18,14 @@ def draw(size: float, name: str) -> Figure:
     ax.plot([0, 1, 2], [0, len(name), 1])
     ax.set_title(name)
     return fig
+
+
+def dies_in_workers(data: tuple[float, int], name: str) -> Figure:
+    """:func:`draw`, except in any process but ``data[1]``, which it kills."""
+    size, parent = data
+    if os.getpid() != parent:
+        os._exit(3)
+    return draw(size, name)
 
 
 NAMES = ["one", "two", "three"]
@@ -54,3 +63,24 @@ def test_the_walking_figures_saved_by_workers_match_those_drawn_here(tmp_path):
         there = save_walking_figures(results, tmp_path / "workers", renderer)
     assert [p.stem for p in there] == list(WALKING_FIGURES)
     assert [p.read_bytes() for p in there] == [p.read_bytes() for p in here]
+
+
+def test_without_worker_processes_the_figures_are_drawn_here(monkeypatch):
+    import anklelab.report.render as render
+
+    def no_semaphores(method):
+        raise OSError("[Errno 38] Function not implemented")
+
+    monkeypatch.setattr(render, "get_context", no_semaphores)
+    with FigureRenderer([__name__], processes=2) as renderer:
+        assert renderer._pool is None
+        rendered = renderer.render(draw, 2.0, NAMES)
+    assert rendered == FigureRenderer(processes=1).render(draw, 2.0, NAMES)
+
+
+def test_a_worker_that_dies_leaves_the_figures_to_the_calling_process():
+    expected = FigureRenderer(processes=1).render(draw, 2.0, NAMES)
+    with FigureRenderer([__name__], processes=2) as renderer:
+        rendered = renderer.render(dies_in_workers, (2.0, os.getpid()), NAMES)
+        assert renderer._pool is None  # the broken pool is shut down
+    assert rendered == expected

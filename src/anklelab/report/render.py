@@ -8,7 +8,9 @@ Given the results, they render one figure per task, in parallel, and return PNG 
 
 Workers are spawned (a fresh interpreter, never a fork of a process whose threads may hold
 locks) and ignore Ctrl-C, which the command handles: leaving the ``with`` block, on success or
-on error, shuts them down. With one usable core everything is drawn in the calling process.
+on error, shuts them down. With one usable core everything is drawn in the calling process, and
+so it is when worker processes cannot be started (no shared-memory semaphores, say) or die: the
+figures are then slower, never missing.
 """
 
 from __future__ import annotations
@@ -18,6 +20,7 @@ import os
 import signal
 from collections.abc import Callable, Sequence
 from concurrent.futures import ProcessPoolExecutor
+from concurrent.futures.process import BrokenProcessPool
 from multiprocessing import get_context
 from types import TracebackType
 from typing import Any, TypeVar
@@ -77,14 +80,17 @@ class FigureRenderer:
         self.processes = min(_usable_cores(), _MAX_PROCESSES) if processes is None else processes
         self._pool: ProcessPoolExecutor | None = None
         if self.processes > 1:
-            self._pool = ProcessPoolExecutor(
-                self.processes,
-                mp_context=get_context("spawn"),
-                initializer=_prepare_worker,
-                initargs=(tuple(modules),),
-            )
-            for _ in range(self.processes):  # the pool starts a worker per pending task
-                self._pool.submit(_ready)
+            try:
+                self._pool = ProcessPoolExecutor(
+                    self.processes,
+                    mp_context=get_context("spawn"),
+                    initializer=_prepare_worker,
+                    initargs=(tuple(modules),),
+                )
+                for _ in range(self.processes):  # the pool starts a worker per pending task
+                    self._pool.submit(_ready)
+            except (OSError, NotImplementedError, BrokenProcessPool):
+                self.close()
 
     def render(
         self, draw: Callable[[T, str], Any], data: T, names: Sequence[str]
@@ -94,16 +100,19 @@ class FigureRenderer:
         ``draw`` must be a module-level function and ``data`` picklable (each task sends them to
         a worker). An exception raised while drawing is raised here, with its traceback.
         """
-        if self._pool is None:
-            return {name: _png(draw, data, name) for name in names}
-        tasks = {name: self._pool.submit(_png, draw, data, name) for name in names}
-        return {name: task.result() for name, task in tasks.items()}
+        if self._pool is not None:
+            try:
+                tasks = {name: self._pool.submit(_png, draw, data, name) for name in names}
+                return {name: task.result() for name, task in tasks.items()}
+            except BrokenProcessPool:  # a worker died (killed, out of memory): draw them here
+                self.close()
+        return {name: _png(draw, data, name) for name in names}
 
     def close(self) -> None:
         """Stop the workers (waiting for any task they are running); idempotent."""
-        if self._pool is not None:
-            self._pool.shutdown(wait=True, cancel_futures=True)
-            self._pool = None
+        pool, self._pool = self._pool, None
+        if pool is not None:
+            pool.shutdown(wait=True, cancel_futures=True)
 
     def __enter__(self) -> FigureRenderer:
         return self

@@ -99,8 +99,9 @@ class WalkingSettings(Parameters):
     change_threshold, change_confidence
         The stiffness is reported as changing within the window when the probability that its
         change over the window (a fraction of it) lies beyond ±``change_threshold`` is at least
-        ``change_confidence``. The probability is Student's t about the estimate with the
-        standard error behind its 95 % interval. 0.7 was chosen on 200 randomised-twin
+        ``change_confidence`` (and the stiffness itself is not poorly determined). The
+        probability is Student's t about the estimate with the standard error behind its 95 %
+        interval. 0.7 was chosen on 200 randomised-twin
         sessions (0.975 would need the whole 95 % interval beyond the threshold, and misses
         half the large changes), and checked on 200 others and on the clean-room generator
         (walking-analysis guide).
