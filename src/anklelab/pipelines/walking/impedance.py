@@ -23,9 +23,10 @@ precise); the linear one wherever the change biases the constant fit by more tha
 stiffness over the window ``W`` as a fraction of it, with its interval. The stiffness is said to
 change within the window when the change lies beyond ±``change_threshold`` with a probability
 of at least ``change_confidence`` (Student's t about the estimate, with the standard error
-behind its interval), and never where the stiffness itself is poorly determined. Requiring the whole 95 % interval beyond the threshold missed half the
-changes of 25 % or more on the randomised twin, where 40 trials per point and thrice the noise
-leave the change's interval ±15 % wide.
+behind its interval), and never where the stiffness itself is poorly determined. Requiring
+the whole 95 % interval beyond the threshold missed half the changes of 25 % or more on the
+randomised twin, where 40 trials per point and thrice the noise leave the change's interval
+±15 % wide.
 """
 
 from __future__ import annotations
