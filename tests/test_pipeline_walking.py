@@ -920,3 +920,18 @@ def test_the_change_probability_is_students_t_about_the_estimate():
         assert _beyond(estimate, 0.4, 11) == pytest.approx(stdtr(10, -1.0))
     assert np.isnan(_beyond(Estimate(0.3, 0.0, (np.nan, np.nan)), 0.2, 11))
     assert np.isnan(_beyond(Estimate(0.3, 0.0, (0.1, 0.5)), 0.2, 1))
+
+
+def test_no_change_is_asserted_where_the_stiffness_is_poorly_determined():
+    """With 2 to 6 trials per point, some changes reach the probability (Student's t with one
+    degree of freedom has heavy tails) where the stiffness itself is left open: never flagged."""
+    from anklelab.experiments import simulate_perturberator
+
+    session = simulate_perturberator(trials_per_point=8, n_unperturbed=16, n_calibration=2, seed=5)
+    result = analyze_walking(session, WalkingSettings(bootstrap_reps=10))
+    points = result.timing_points
+    assert any(
+        tp.stiffness_change_probability >= 0.7 and tp.stiffness.poorly_determined for tp in points
+    )
+    assert not any(tp.stiffness_changes and tp.stiffness.poorly_determined for tp in points)
+    assert not any(tp.stiffness_changes for tp in points)  # the prosthetic foot's barely changes

@@ -84,3 +84,51 @@ def test_a_worker_that_dies_leaves_the_figures_to_the_calling_process():
         rendered = renderer.render(dies_in_workers, (2.0, os.getpid()), NAMES)
         assert renderer._pool is None  # the broken pool is shut down
     assert rendered == expected
+
+
+def test_data_that_cannot_be_sent_to_the_workers_is_drawn_here():
+    expected = FigureRenderer(processes=1).render(draw, 2.0, NAMES)
+    with FigureRenderer([__name__], processes=2) as renderer:
+        rendered = renderer.render(lambda size, name: draw(size, name), 2.0, NAMES)
+        assert renderer._pool is None
+    assert rendered == expected
+
+
+def test_the_workers_exit_when_the_process_that_started_them_is_killed(tmp_path):
+    """However the command dies (SIGKILL here), its workers do not wait for tasks forever."""
+    import signal
+    import subprocess
+    import sys
+    import time
+
+    script = tmp_path / "start.py"
+    script.write_text(
+        "import os, signal\n"
+        "from anklelab.report.render import FigureRenderer\n"
+        "if __name__ == '__main__':\n"
+        "    renderer = FigureRenderer(processes=2)\n"
+        "    print(' '.join(str(p) for p in renderer._pool._processes), flush=True)\n"
+        "    os.kill(os.getpid(), signal.SIGKILL)\n"
+    )
+    # files, not pipes: the workers inherit them, and a pipe would stay open while they live
+    out, err = tmp_path / "out", tmp_path / "err"
+    with out.open("w") as stdout, err.open("w") as stderr:
+        code = subprocess.run([sys.executable, str(script)], stdout=stdout, stderr=stderr)
+    assert code.returncode == -signal.SIGKILL, err.read_text()
+    workers = [int(pid) for pid in out.read_text().split()]
+    assert len(workers) == 2
+
+    def alive(pid: int) -> bool:
+        try:
+            with open(f"/proc/{pid}/stat") as stat:
+                return stat.read().split(")")[-1].split()[0] != "Z"
+        except FileNotFoundError:
+            return False
+
+    deadline = time.monotonic() + 30.0
+    while any(map(alive, workers)) and time.monotonic() < deadline:
+        time.sleep(0.1)
+    left = [pid for pid in workers if alive(pid)]
+    for pid in left:
+        os.kill(pid, signal.SIGKILL)
+    assert not left

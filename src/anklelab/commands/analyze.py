@@ -158,11 +158,14 @@ def analyze(
     filters = PlatformFilters.load(filters_file) if filters_file else None
     inputs = [p for p in (session_path, settings_file, filters_file) if p is not None]
     with (
-        _renderer(figures) as renderer,
+        contextlib.ExitStack() as stack,
         output_directory(out, command="analyze", force=force, inputs=inputs) as run,
         recording_progress() as task,
     ):
         session = load_session(session_path, progress=task(f"reading {session_path.name}"))
+        # started once the session has been read (a bad one is refused at once), the figure
+        # workers import matplotlib during the analysis
+        renderer = stack.enter_context(_renderer(figures))
         step = task("analysing")
         total = len(STEPS) + 1 + figures
         names = list(STEPS)

@@ -7,21 +7,30 @@ computes, they import matplotlib and the figure modules on the cores the analysi
 Given the results, they render one figure per task, in parallel, and return PNG bytes.
 
 Workers are spawned (a fresh interpreter, never a fork of a process whose threads may hold
-locks) and ignore Ctrl-C, which the command handles: leaving the ``with`` block, on success or
-on error, shuts them down. With one usable core everything is drawn in the calling process, and
-so it is when worker processes cannot be started (no shared-memory semaphores, say) or die: the
-figures are then slower, never missing.
+locks). They ignore Ctrl-C from their first instant (the command handles it and, leaving the
+``with`` block, shuts them down) and exit when the process that started them dies, however it
+dies. With one usable core everything is drawn in the calling process, and so it is when
+worker processes cannot be started (no shared-memory semaphores, say), die, or cannot be sent
+the data: the figures are then slower, never missing.
+
+As with every spawned process, the starting script must guard its top level with
+``if __name__ == "__main__":`` (the ``anklelab`` command does): a worker imports the main module.
 """
 
 from __future__ import annotations
 
 import importlib
+import multiprocessing
 import os
+import pickle
 import signal
-from collections.abc import Callable, Sequence
+import threading
+from collections.abc import Callable, Iterator, Sequence
 from concurrent.futures import ProcessPoolExecutor
 from concurrent.futures.process import BrokenProcessPool
+from contextlib import contextmanager
 from multiprocessing import get_context
+from multiprocessing.connection import wait
 from types import TracebackType
 from typing import Any, TypeVar
 
@@ -35,8 +44,16 @@ _MAX_PROCESSES = 4
 """More workers than this would only add start-up work: a command draws at most a few figures."""
 
 
+def _exit_with(parent: Any) -> None:
+    wait([parent.sentinel])
+    os._exit(1)
+
+
 def _prepare_worker(modules: Sequence[str]) -> None:
-    signal.signal(signal.SIGINT, signal.SIG_IGN)  # the command's process handles Ctrl-C
+    signal.signal(signal.SIGINT, signal.SIG_IGN)  # already so if started by the constructor
+    parent = multiprocessing.parent_process()
+    if parent is not None:  # a worker whose parent was killed would wait for tasks forever
+        threading.Thread(target=_exit_with, args=(parent,), daemon=True).start()
     for module in ("matplotlib.figure", "matplotlib.backends.backend_agg", *modules):
         importlib.import_module(module)
 
@@ -45,8 +62,8 @@ def _ready() -> None:
     """A task that only makes the pool start a worker now."""
 
 
-def _png(draw: Callable[[T, str], Any], data: T, name: str) -> bytes:
-    return figure_png(draw(data, name))
+def _png(draw: Callable[[T, str], Any], payload: bytes, name: str) -> bytes:
+    return figure_png(draw(pickle.loads(payload), name))
 
 
 def _usable_cores() -> int:
@@ -54,6 +71,20 @@ def _usable_cores() -> int:
         return len(os.sched_getaffinity(0))
     except AttributeError:  # not on Linux
         return os.cpu_count() or 1
+
+
+@contextmanager
+def _ctrl_c_ignored() -> Iterator[None]:
+    """Ctrl-C ignored while workers start: they inherit that from their first instant (the
+    initializer would come too late to spare the terminal their tracebacks)."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    previous = signal.signal(signal.SIGINT, signal.SIG_IGN)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, previous)
 
 
 class FigureRenderer:
@@ -66,7 +97,8 @@ class FigureRenderer:
         classes of the data they draw), besides matplotlib.
     processes : int, optional
         Worker processes; by default one per usable core, at most 4. With 1 (or a single-core
-        machine) figures are drawn in the calling process and nothing is started.
+        machine, or inside a worker process) figures are drawn in the calling process and
+        nothing is started.
 
     Examples
     --------
@@ -77,18 +109,23 @@ class FigureRenderer:
     """
 
     def __init__(self, modules: Sequence[str] = (), processes: int | None = None) -> None:
-        self.processes = min(_usable_cores(), _MAX_PROCESSES) if processes is None else processes
+        if processes is None:
+            processes = min(_usable_cores(), _MAX_PROCESSES)
+        if multiprocessing.parent_process() is not None:
+            processes = 1  # never workers of workers
+        self.processes = processes
         self._pool: ProcessPoolExecutor | None = None
-        if self.processes > 1:
+        if processes > 1:
             try:
                 self._pool = ProcessPoolExecutor(
-                    self.processes,
+                    processes,
                     mp_context=get_context("spawn"),
                     initializer=_prepare_worker,
                     initargs=(tuple(modules),),
                 )
-                for _ in range(self.processes):  # the pool starts a worker per pending task
-                    self._pool.submit(_ready)
+                with _ctrl_c_ignored():
+                    for _ in range(processes):  # the pool starts a worker per pending task
+                        self._pool.submit(_ready)
             except (OSError, NotImplementedError, BrokenProcessPool):
                 self.close()
 
@@ -97,16 +134,23 @@ class FigureRenderer:
     ) -> dict[str, bytes]:
         """PNG bytes of ``draw(data, name)`` for every name, in the order given.
 
-        ``draw`` must be a module-level function and ``data`` picklable (each task sends them to
-        a worker). An exception raised while drawing is raised here, with its traceback.
+        ``draw`` should be a module-level function and ``data`` picklable: each worker is sent
+        them (``data`` pickled once for all). An exception raised while drawing is raised here,
+        with its traceback.
         """
         if self._pool is not None:
             try:
-                tasks = {name: self._pool.submit(_png, draw, data, name) for name in names}
-                return {name: task.result() for name, task in tasks.items()}
-            except BrokenProcessPool:  # a worker died (killed, out of memory): draw them here
-                self.close()
-        return {name: _png(draw, data, name) for name in names}
+                payload = pickle.dumps(data, protocol=pickle.HIGHEST_PROTOCOL)
+                pickle.dumps(draw)
+            except (pickle.PicklingError, TypeError, AttributeError):
+                self.close()  # a lambda, a local class: drawn here
+            else:
+                try:
+                    tasks = {name: self._pool.submit(_png, draw, payload, name) for name in names}
+                    return {name: task.result() for name, task in tasks.items()}
+                except BrokenProcessPool:  # a worker died (killed, out of memory): drawn here
+                    self.close()
+        return {name: figure_png(draw(data, name)) for name in names}
 
     def close(self) -> None:
         """Stop the workers (waiting for any task they are running); idempotent."""

@@ -143,7 +143,8 @@ class TimingPoint:
     stiffness_slope : Estimate or None
         ``k₁``, N·m/rad/s, when the linear model is used.
     stiffness_change_probability : float
-        The diagnostic's probability that the change lies beyond ±``change_threshold`` (NaN
+        The diagnostic's probability that the change lies beyond ``change_threshold`` on its
+        estimate's side (NaN without an interval, e.g. with one trial, and
         in files written before it existed).
     window_stiffness : dict of str to float
         Stiffness for each sensitivity window (key: window in ms, ``"75"``), N·m/rad.

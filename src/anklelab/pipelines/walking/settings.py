@@ -98,7 +98,8 @@ class WalkingSettings(Parameters):
         widen the intervals (damping moves by about ``k δ``, inertia by ``b δ``), ms.
     change_threshold, change_confidence
         The stiffness is reported as changing within the window when the probability that its
-        change over the window (a fraction of it) lies beyond ±``change_threshold`` is at least
+        change over the window (a fraction of it) lies beyond ``change_threshold`` on its
+        estimate's side is at least
         ``change_confidence`` (and the stiffness itself is not poorly determined). The
         probability is Student's t about the estimate with the standard error behind its 95 %
         interval. 0.7 was chosen on 200 randomised-twin
@@ -143,7 +144,7 @@ class WalkingSettings(Parameters):
     interval_reps: int = Field(200, ge=20, le=20_000)
     timing_uncertainty_ms: float = Field(1.0, ge=0)
     change_threshold: float = Field(0.2, gt=0)
-    change_confidence: float = Field(0.7, gt=0.5, lt=1.0)
+    change_confidence: float = Field(0.7, ge=0.5, lt=1.0)
     bootstrap_reps: int = Field(100, ge=1, le=20_000)
     bootstrap_fraction: float = Field(0.6, gt=0, le=1)
     seed: int = Field(0, ge=0)
