@@ -100,7 +100,7 @@ def _tiled(session: Session, copies: int) -> Session:
     walking = tuple(
         dataclasses.replace(
             t,
-            trial=t.trial + k * 100_000,
+            trial=str(int(t.trial) + k * 100_000),  # the baseline reads only integer labels
             recording=dataclasses.replace(t.recording, name=f"c{k}_{t.recording.name}"),
         )
         for k in range(copies)
