@@ -1,14 +1,11 @@
 """The ``anklelab`` group imports a subcommand's module only when that subcommand is used."""
 
-import json
-import subprocess
-import sys
-
 import pytest
 import typer
 from typer.testing import CliRunner
 
 from anklelab.cli import COMMANDS, LazyCommand, LazyCommands, app
+from tests.module_loading import loaded
 
 runner = CliRunner()
 RUN = "from anklelab.cli import run; run()"
@@ -16,19 +13,7 @@ RUN = "from anklelab.cli import run; run()"
 
 def command_modules(code: str, *argv: str) -> set[str]:
     """The ``anklelab.commands`` modules loaded after running ``code`` with ``argv``."""
-    script = (
-        "import json, sys\n"
-        f"sys.argv = ['anklelab', *{list(argv)!r}]\n"
-        "try:\n"
-        f"    {code}\n"
-        "except SystemExit:\n"
-        "    pass\n"
-        "sys.stderr.write('\\nMODULES ' + json.dumps(sorted(sys.modules)))\n"
-    )
-    proc = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True)
-    assert "MODULES " in proc.stderr, proc.stderr
-    modules = json.loads(proc.stderr.rsplit("MODULES ", 1)[1])
-    return {m for m in modules if m == "anklelab.commands" or m.startswith("anklelab.commands.")}
+    return {m for m in loaded(code, *argv) if m.split(".")[:2] == ["anklelab", "commands"]}
 
 
 def test_importing_the_cli_imports_no_command_module():

@@ -1,33 +1,14 @@
 """Each command and package loads only what it uses (package names load on first use)."""
 
-import json
-import subprocess
-import sys
-
 import pytest
 
 from anklelab.data import save_session
 from anklelab.data._synthetic import random_session
+from tests.module_loading import loaded
 
 TWINS = ["numba", "llvmlite", "anklelab.sim", "anklelab.control", "anklelab.experiments"]
 LAB_FORMATS = ["ezc3d", "anklelab.data.c3d", "anklelab.data.c3d_import", "anklelab.data.matlab_map"]
 HEAVY = [*TWINS, *LAB_FORMATS, "scipy", "h5py", "matplotlib", "pyarrow"]
-
-
-def loaded(code, *argv):
-    """The modules loaded after running ``code`` (which may run the CLI with ``argv``)."""
-    script = (
-        "import json, sys\n"
-        f"sys.argv = ['anklelab', *{list(map(str, argv))!r}]\n"
-        "try:\n"
-        f"    {code}\n"
-        "except SystemExit:\n"
-        "    pass\n"
-        "sys.stderr.write('\\nMODULES ' + json.dumps(sorted(sys.modules)))\n"
-    )
-    proc = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True)
-    assert "MODULES " in proc.stderr, proc.stderr
-    return set(json.loads(proc.stderr.rsplit("MODULES ", 1)[1]))
 
 
 def test_importing_anklelab_and_its_packages_loads_nothing_heavy():
