@@ -935,3 +935,31 @@ def test_no_change_is_asserted_where_the_stiffness_is_poorly_determined():
     )
     assert not any(tp.stiffness_changes and tp.stiffness.poorly_determined for tp in points)
     assert not any(tp.stiffness_changes for tp in points)  # the prosthetic foot's barely changes
+
+
+def test_stance_in_blocks_equals_the_stance_in_one(small, monkeypatch):
+    """Trials are filtered in blocks to bound memory; any block size gives the same numbers,
+    with recordings of different lengths (one shorter than the others, one too short)."""
+    from anklelab.pipelines.walking import fit_platform_filters, stance
+    from anklelab.pipelines.walking.stance import stance_trials
+
+    session = _shortened_walking(small.session, {1}, 5)
+    walking = list(session.walking)
+    walking[3] = dataclasses.replace(
+        walking[3], recording=_truncated(walking[3].recording, walking[3].recording.n_samples - 90)
+    )
+    session = _with_walking(session, walking)
+    settings = WalkingSettings()
+    filters, *_ = fit_platform_filters(session, settings)
+    whole, _ = stance_trials(session, settings, filters)
+    row_bytes = 8 * 10 * max(w.recording.n_samples for w in walking)
+    monkeypatch.setattr(stance, "_BLOCK_BYTES", 3 * row_bytes)  # blocks of 3 trials
+    blocked, _ = stance_trials(session, settings, filters)
+    assert len(session.walking) > 6
+    assert np.array_equal(blocked.data, whole.data)
+    assert blocked.drop_log == whole.drop_log and blocked.drop_log[1]
+    for key, value in whole.metadata.items():
+        same = blocked.metadata[key] == value
+        if value.dtype.kind == "f":
+            same |= np.isnan(blocked.metadata[key]) & np.isnan(value)
+        assert same.all(), key

@@ -97,3 +97,21 @@ def test_stack_recordings_pads_with_the_last_value():
     data, lengths = stack_recordings(recs, ["x"])
     assert lengths.tolist() == [3, 5]
     assert data[0, 0].tolist() == [1.0, 2.0, 3.0, 3.0, 3.0]
+
+
+def test_stack_recordings_to_a_common_width():
+    recs = [Recording("a.csv", {"time_s": np.arange(3.0), "x": np.array([1.0, 2.0, 3.0])})]
+    data, _ = stack_recordings(recs, ["x"], width=5)
+    assert data[0, 0].tolist() == [1.0, 2.0, 3.0, 3.0, 3.0]
+    with pytest.raises(ValueError, match="width: expected at least the longest recording's 3"):
+        stack_recordings(recs, ["x"], width=2)
+
+
+def test_pick_keeps_the_named_channels_in_order():
+    t = Trials(np.arange(12.0).reshape(2, 3, 2), 100.0, ["a", "b", "c"], {"k": [1, 2]}, tmin=-0.01)
+    t = t.drop([True, False], "gone")
+    picked = t.pick(["c", "a"])
+    assert picked.ch_names == ("c", "a")
+    assert np.array_equal(picked.get_data(), t.get_data(["c", "a"]))
+    assert picked.drop_log == t.drop_log and picked.selection.tolist() == [1]
+    assert picked.metadata["k"].tolist() == [2] and picked.tmin == t.tmin

@@ -191,15 +191,22 @@ def create_group(parent: h5py.Group, name: str) -> h5py.Group:
     return parent.create_group(link_name(name), track_order=True)
 
 
-def write_h5_tree(group: h5py.Group, tree: Mapping[str, Any]) -> None:
+def write_h5_tree(group: h5py.Group, tree: Mapping[str, Any]) -> dict[str, Any]:
     """Store a tree in ``group``: sub-trees as groups, arrays as datasets, the rest as attributes.
 
     Keys are written in sorted order and no timestamps are stored, so equal trees give
-    identical bytes.
+    identical bytes. Returns the canonical form of ``tree`` that was written (made once: a
+    session's truth holds hundreds of MiB of arrays).
     """
-    for key, value in sorted(canonical(tree).items()):
+    written = canonical(tree)
+    _write_canonical(group, written)
+    return written
+
+
+def _write_canonical(group: h5py.Group, tree: Mapping[str, Any]) -> None:
+    for key, value in sorted(tree.items()):
         if isinstance(value, dict):
-            write_h5_tree(create_group(group, key), value)
+            _write_canonical(create_group(group, key), value)
         elif isinstance(value, np.ndarray):
             group.create_dataset(link_name(key), data=value, track_times=False)
         elif value is None:

@@ -65,7 +65,7 @@ from anklelab.data._hdf5_v2 import (
     read_v2,
 )
 from anklelab.data._progress import Progress
-from anklelab.data._tree import canonical, create_group, write_h5_tree
+from anklelab.data._tree import create_group, write_h5_tree
 from anklelab.data.session import Recording, Session
 from anklelab.errors import SessionFormatError
 
@@ -148,8 +148,7 @@ def _write_section(
 
 
 def _write_tree(f: h5py.File, name: str, tree: Any) -> str:
-    write_h5_tree(create_group(f, name), tree)
-    return sha256_tree(canonical(tree))
+    return sha256_tree(write_h5_tree(create_group(f, name), tree))
 
 
 def _extra_json(extra: Any) -> str:

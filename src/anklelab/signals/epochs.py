@@ -153,6 +153,19 @@ class Trials:
             return self.data[:, self._channel(picks)]
         return self.data[:, [self._channel(name) for name in picks]]
 
+    def pick(self, names: Sequence[str]) -> Trials:
+        """A copy holding only the channels ``names``, in that order (trials, metadata and drop
+        log as they are)."""
+        return Trials(
+            self.get_data(list(names)),
+            self.fs,
+            names,
+            self.metadata,
+            tmin=self.tmin,
+            drop_log=self.drop_log,
+            selection=self.selection,
+        )
+
     def _channel(self, name: str) -> int:
         try:
             return self.ch_names.index(name)
@@ -278,7 +291,7 @@ def advance(x: ArrayLike, lead: float) -> NDArray[np.float64]:
 
 
 def stack_recordings(
-    recordings: Sequence[Recording], columns: Sequence[str]
+    recordings: Sequence[Recording], columns: Sequence[str], width: int | None = None
 ) -> tuple[NDArray[np.float64], NDArray[np.int64]]:
     """Stack the named columns of many recordings into one padded array.
 
@@ -288,16 +301,22 @@ def stack_recordings(
         Trials of possibly different lengths.
     columns : sequence of str
         Column names to stack, in order.
+    width : int, optional
+        Samples per row, at least the longest recording's (default: the longest's), so that
+        the stacks of several groups of recordings line up.
 
     Returns
     -------
-    data : ndarray, shape (n_recordings, n_columns, max_samples)
+    data : ndarray, shape (n_recordings, n_columns, width)
         Each recording padded at its end with its last value.
     lengths : ndarray of int
         Samples in each recording.
     """
     lengths = np.array([rec.n_samples for rec in recordings], dtype=np.int64)
-    data = np.empty((len(recordings), len(columns), int(lengths.max(initial=0))))
+    longest = int(lengths.max(initial=0))
+    if width is not None and width < longest:
+        raise ValueError(f"width: expected at least the longest recording's {longest}, got {width}")
+    data = np.empty((len(recordings), len(columns), longest if width is None else width))
     for row, rec in zip(data, recordings, strict=True):
         row[:, : rec.n_samples] = rec.stack(tuple(columns))
         row[:, rec.n_samples :] = row[:, rec.n_samples - 1 : rec.n_samples]

@@ -10,7 +10,9 @@ from a local quadratic fit; and the perturbation onset is detected from the moto
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
+from typing import NamedTuple
 
 import numpy as np
 from numpy.typing import NDArray
@@ -130,6 +132,11 @@ def _mislabelled_conditions(
     return messages
 
 
+_BLOCK_BYTES = 64 * 2**20
+"""Trials are filtered in blocks of about this many bytes of stacked raw samples, so that the
+temporaries stay bounded however many trials a session holds (only the stance is kept)."""
+
+
 def stance_trials(
     session: Session, settings: WalkingSettings, filters: PlatformFilters
 ) -> tuple[Trials, list[str]]:
@@ -142,10 +149,7 @@ def stance_trials(
     fs = info.sample_rate_hz
     if not walking:
         raise SessionFormatError("walking/trials.csv: the session has no walking trials")
-    plate = info.force_plate
-    raw, lengths = stack_recordings(
-        [w.recording for w in walking], ("motor_angle", "ankle_angle", *plate.channels)
-    )
+    lengths = np.array([w.recording.n_samples for w in walking], dtype=np.int64)
     n_base = max(1, round(settings.baseline_ms * fs / 1000.0))
     n_filter = lowpass_min_samples(fs, settings.cutoff_hz, order=settings.filter_order)
     base, thr = f"{settings.baseline_ms:g} ms", f"{settings.heel_contact_threshold_n:g} N"
@@ -158,11 +162,115 @@ def stance_trials(
             "walking/trials.csv: no walking trial is long enough to analyse: "
             + drop_summary(_first_reasons(too_short, len(walking)), walking)
         )
+    perturbed = np.array([w.perturbed for w in walking])
+    delay = np.array([w.delay_ms for w in walking], dtype=float)
+    sign = np.array([{"dorsi": 1.0, "plantar": -1.0}.get(w.direction, 0.0) for w in walking])
+    tolerance = settings.onset_tolerance_ms
+    # a kept trial's onset lies within the tolerance of its delay, so no stance is longer
+    latest = np.max(delay[perturbed & np.isfinite(delay)], initial=0.0) + tolerance
+    n_stance = math.ceil(latest * fs / 1000.0) + 1 + samples(max(settings.windows_ms()), fs)
+    width = int(lengths.max())  # every block padded alike: the filtering sees the same rows
+    per_block = max(1, _BLOCK_BYTES // (8 * (2 + len(info.force_plate.channels)) * width))
+    blocks = [
+        _stance_block(session, slice(i, i + per_block), settings, filters, width, n_stance)
+        for i in range(0, len(walking), per_block)
+    ]
+    block = _StanceBlock(*(np.concatenate(parts) for parts in zip(*blocks, strict=True)))
+    found = np.isfinite(block.onset)
+    onset = np.where(found, block.onset, block.event)
+    offset = np.round(onset).astype(np.int64) - block.event
+    onset_ms = (onset - block.event) / fs * 1000.0
+    log = _first_reasons(
+        [
+            *too_short,
+            (block.contact < 0, f"no heel contact: vertical force never held {thr}"),
+            (
+                block.contact <= n_base,
+                f"heel contact within the first {base} (no unloaded baseline)",
+            ),
+            (~np.isfinite(block.cop0), "centre of pressure undefined at heel contact"),
+            (perturbed & np.isnan(delay), "perturbed trial without delay_ms"),
+            (perturbed & (sign == 0), "perturbed trial without a direction (dorsi or plantar)"),
+            (perturbed & ~found, "no perturbation found in the motor angle"),
+            (
+                perturbed & (np.sign(block.amplitude) != sign),
+                "motor moved against the manifest direction",
+            ),
+            (perturbed & (onset < block.event), "perturbation began before heel contact"),
+            (
+                perturbed & (np.abs(onset_ms - delay) > tolerance),
+                _mismatch_reasons(walking, onset_ms, tolerance),
+            ),
+            (~perturbed & found, "motor angle moved in an unperturbed trial"),
+        ],
+        len(walking),
+    )
+    mislabelled = _mislabelled_conditions(walking, log, onset_ms, tolerance)
+    usable = perturbed & np.array([not r for r in log])
+    span = int(np.max(offset[usable], initial=0)) + samples(max(settings.windows_ms()), fs)
+    time0 = np.array([w.recording.time_s[0] for w in walking])
+    metadata = {
+        "condition": np.array([condition(w) for w in walking]),
+        "trial": np.array([w.trial for w in walking]),
+        "delay_ms": delay,
+        "heel_contact_s": time0 + block.event / fs,
+        "onset_s": np.where(perturbed & found, time0 + onset / fs, np.nan),
+        "onset_ms": np.where(perturbed & found, onset_ms, np.nan),
+        "offset": offset,
+    }
+    stance = epoch(
+        block.stance[..., : max(span, 1)],
+        fs,
+        np.zeros_like(block.event),
+        0.0,
+        (span - 1) / fs,
+        ch_names=STANCE_CHANNELS,
+        metadata=metadata,
+        lengths=lengths - block.event,
+        drop_log=log,
+    )
+    undefined = ~np.isfinite(stance.data).all(axis=(1, 2))
+    if undefined.any():
+        stance = stance.drop(
+            undefined, "vertical force below 1 N within the analysed stance (COP undefined)"
+        )
+    return stance, mislabelled
+
+
+class _StanceBlock(NamedTuple):
+    """Per trial of a block: the first ``n_stance`` samples after heel contact of every stance
+    channel, and what the drop checks need (samples; NaN where undefined)."""
+
+    stance: NDArray[np.float64]  # (n_trials, len(STANCE_CHANNELS), n_stance)
+    contact: NDArray[np.int64]  # heel contact's sample (-1: none)
+    event: NDArray[np.int64]  # the sample the stance starts at
+    cop0: NDArray[np.float64]  # COP at heel contact, m
+    onset: NDArray[np.float64]  # perturbation onset, fractional sample
+    amplitude: NDArray[np.float64]  # the motor's signed excursion, rad
+
+
+def _stance_block(
+    session: Session,
+    trials: slice,
+    settings: WalkingSettings,
+    filters: PlatformFilters,
+    width: int,
+    n_stance: int,
+) -> _StanceBlock:
+    """The stance of the walking ``trials``, their raw samples padded to ``width``."""
+    info, walking = session.info, session.walking[trials]
+    fs = info.sample_rate_hz
+    plate = info.force_plate
+    raw, _ = stack_recordings(
+        [w.recording for w in walking], ("motor_angle", "ankle_angle", *plate.channels), width
+    )
+    n_base = max(1, round(settings.baseline_ms * fs / 1000.0))
     # the plate's signals that are linear in the load (its channels, or for GRF/COP data the
     # sagittal signals); they, the motor and the ankle angle are zeroed over the baseline (the
     # ankle angle is re-zeroed later)
     load = advance(plate.load_signals(raw[:, 2:]), settings.force_delay_samples(fs))
     signals = np.concatenate([raw[:, :2], load], axis=1)
+    del raw, load
     signals -= signals[..., :n_base].mean(axis=-1, keepdims=True)
     motor, ankle_raw = signals[:, 0], signals[:, 1]
     sagittal = sagittal_matrix(plate)
@@ -215,43 +323,9 @@ def stance_trials(
         grf_z, torque, dx = foot_load(motor - np.nan_to_num(torque) / stiffness)
     ankle = lowpass(ankle_raw, **lp)
     kin = kinematics(ankle - ankle[rows, event][:, None], fs, settings.derivative_window)
-
     onsets = perturbation_onset(
         motor, start=event, min_amplitude_rad=settings.onset_min_amplitude_rad
     )
-    found = np.isfinite(onsets.index)
-    perturbed = np.array([w.perturbed for w in walking])
-    delay = np.array([w.delay_ms for w in walking], dtype=float)
-    sign = np.array([{"dorsi": 1.0, "plantar": -1.0}.get(w.direction, 0.0) for w in walking])
-    onset = np.where(found, onsets.index, event)
-    offset = np.round(onset).astype(np.int64) - event
-    onset_ms = (onset - event) / fs * 1000.0
-    tolerance = settings.onset_tolerance_ms
-    log = _first_reasons(
-        [
-            *too_short,
-            (contact < 0, f"no heel contact: vertical force never held {thr}"),
-            (contact <= n_base, f"heel contact within the first {base} (no unloaded baseline)"),
-            (~cop_defined, "centre of pressure undefined at heel contact"),
-            (perturbed & np.isnan(delay), "perturbed trial without delay_ms"),
-            (perturbed & (sign == 0), "perturbed trial without a direction (dorsi or plantar)"),
-            (perturbed & ~found, "no perturbation found in the motor angle"),
-            (
-                perturbed & (np.sign(onsets.amplitude) != sign),
-                "motor moved against the manifest direction",
-            ),
-            (perturbed & (onset < event), "perturbation began before heel contact"),
-            (
-                perturbed & (np.abs(onset_ms - delay) > tolerance),
-                _mismatch_reasons(walking, onset_ms, tolerance),
-            ),
-            (~perturbed & found, "motor angle moved in an unperturbed trial"),
-        ],
-        len(walking),
-    )
-    mislabelled = _mislabelled_conditions(walking, log, onset_ms, tolerance)
-    usable = perturbed & np.array([not r for r in log])
-    span = int(np.max(offset[usable], initial=0)) + samples(max(settings.windows_ms()), fs)
     grf_x_raw, grf_z_raw, moment_raw = np.moveaxis(load_raw, 1, 0)
     lever = np.where(cop_defined, cop0, 0.0)[:, None] + info.heel_to_ankle_m
     channels_by_name = {
@@ -266,38 +340,12 @@ def stance_trials(
         "grf_z_raw": grf_z_raw,
         "angle_raw": ankle_raw - ankle[rows, event][:, None],
     }
-    window = np.minimum(event[:, None] + np.arange(max(span, 1)), raw.shape[-1] - 1)
-    data = np.stack(  # only the analysed stance of each channel is copied
+    window = np.minimum(event[:, None] + np.arange(n_stance), width - 1)
+    stance = np.stack(  # only the stance of each channel is copied
         [np.take_along_axis(channels_by_name[name], window, axis=-1) for name in STANCE_CHANNELS],
         axis=1,
     )
-    time0 = np.array([w.recording.time_s[0] for w in walking])
-    metadata = {
-        "condition": np.array([condition(w) for w in walking]),
-        "trial": np.array([w.trial for w in walking]),
-        "delay_ms": delay,
-        "heel_contact_s": time0 + event / fs,
-        "onset_s": np.where(perturbed & found, time0 + onset / fs, np.nan),
-        "onset_ms": np.where(perturbed & found, onset_ms, np.nan),
-        "offset": offset,
-    }
-    stance = epoch(
-        data,
-        fs,
-        np.zeros_like(event),
-        0.0,
-        (span - 1) / fs,
-        ch_names=STANCE_CHANNELS,
-        metadata=metadata,
-        lengths=lengths - event,
-        drop_log=log,
-    )
-    undefined = ~np.isfinite(stance.data).all(axis=(1, 2))
-    if undefined.any():
-        stance = stance.drop(
-            undefined, "vertical force below 1 N within the analysed stance (COP undefined)"
-        )
-    return stance, mislabelled
+    return _StanceBlock(stance, contact, event, cop0, onsets.index, onsets.amplitude)
 
 
 def _cop_at_contact(
