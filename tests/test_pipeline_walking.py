@@ -233,8 +233,10 @@ def test_recovers_known_impedance_in_both_directions(mini, analysed):
         assert _close(tp.inertia, INERTIA, 0.01 * INERTIA), key
         assert _close(tp.damping, B, 0.2), key
         assert tp.vaf.mean > 99.0
-        # a constant impedance: the change over the window is within its interval of zero
+        # a constant impedance: the change over the window is within its interval of zero, and
+        # its interval within ±20 %: the data say that the stiffness is constant
         assert not tp.stiffness_changes, key
+        assert tp.stiffness_change_verdict == "constant", key
         assert tp.cop_m == pytest.approx(mini.expected_cop[key], abs=1e-3)
         true = np.sort(mini.true_onset_ms[key])
         assert np.allclose(np.sort(tp.onset_ms), true, atol=1.5)
@@ -330,6 +332,7 @@ def test_results_document_has_exactly_the_contract_keys(analysed):
         "stiffness_model",
         "stiffness_changes",
         "stiffness_change_probability",
+        "stiffness_change_verdict",
         "window_sensitivity",
         "adjustment_explained",
     }
@@ -339,6 +342,13 @@ def test_results_document_has_exactly_the_contract_keys(analysed):
     # the results read back are the results written
     again = WalkingResults.from_dict(doc)
     assert json.loads(json.dumps(again.to_dict(session="abc"))) == doc
+    # a file written before the additive keys existed still reads
+    older = json.loads(json.dumps(doc))
+    for node in older["timing_points"]:
+        del node["stiffness_change_verdict"], node["stiffness_change_probability"]
+    (first, *_) = WalkingResults.from_dict(older).timing_points
+    assert first.stiffness_change_verdict is None
+    assert np.isnan(first.stiffness_change_probability)
     assert set(point["window_sensitivity"]["75"]) == {"stiffness_nm_per_rad"}
     assert [b["distance_m"] for b in doc["bench"]] == [0.06, 0.085, 0.11]
     assert set(doc["bench"][0]) == {"distance_m", "stiffness_nm_per_rad", "r2", "n_tests"}
@@ -787,7 +797,7 @@ def test_twin_human_ankle_default_settings_follow_the_rising_stiffness(human_ses
         if tp.delay_ms < 400:  # the window lies within the rise (until 525 ms)
             assert tp.stiffness_model == "linear" and tp.stiffness_change.mean > 0, tp.key
         if tp.delay_ms == 225:
-            assert tp.stiffness_changes, tp.key
+            assert tp.stiffness_changes and tp.stiffness_change_verdict == "changes", tp.key
             assert error_constant - error > 0.05 * k, (tp.key, error_constant, error)
 
 
@@ -963,3 +973,23 @@ def test_stance_in_blocks_equals_the_stance_in_one(small, monkeypatch):
         if value.dtype.kind == "f":
             same |= np.isnan(blocked.metadata[key]) & np.isnan(value)
         assert same.all(), key
+
+
+@pytest.mark.parametrize(
+    ("interval", "changes", "determined", "verdict"),
+    [
+        ((0.25, 0.6), True, True, "changes"),
+        ((-0.19, 0.19), False, True, "constant"),
+        ((-0.05, 0.21), False, True, "undetermined"),  # a change of 21 % is not excluded
+        ((-0.1, 0.1), False, False, "undetermined"),  # relative to a stiffness left open
+        ((np.nan, np.nan), False, True, "undetermined"),  # one trial: no interval
+    ],
+)
+def test_change_verdict_says_constant_only_when_the_interval_excludes_the_threshold(
+    interval, changes, determined, verdict
+):
+    from anklelab.pipelines.walking.impedance import _change_verdict
+    from anklelab.pipelines.walking.results import Estimate
+
+    change = Estimate(float(np.mean(interval)), 0.1, interval)
+    assert _change_verdict(change, changes, determined, 0.2) == verdict

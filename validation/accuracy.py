@@ -131,6 +131,7 @@ def _change(tp: dict[str, Any]) -> dict[str, Any]:
         "change_low": low,
         "change_high": high,
         "change_probability": tp.get("stiffness_change_probability", ""),
+        "change_verdict": tp.get("stiffness_change_verdict") or "",
     }
 
 
@@ -265,6 +266,13 @@ def _distribution_lines(group: Sequence[dict[str, Any]]) -> list[str]:
         out.append(f"  diagnostic false alarms {flagged[small].mean():6.1%} of {small.sum()}")
     if large.any():
         out.append(f"  diagnostic misses       {(~flagged[large]).mean():6.1%} of {large.sum()}")
+    verdicts = np.array([str(r.get("change_verdict", "")) for r in group])
+    if (verdicts != "").any():
+        for name, group in (("true change < 15 %", small), ("true change >= 25 %", large)):
+            said = {
+                v: (verdicts[group] == v).mean() for v in ("changes", "constant", "undetermined")
+            }
+            out.append(f"  verdicts, {name}: " + ", ".join(f"{v} {r:.1%}" for v, r in said.items()))
     return out
 
 

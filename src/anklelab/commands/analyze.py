@@ -72,6 +72,9 @@ def trials_table(session: Session, results: WalkingResults) -> list[dict[str, An
     return rows
 
 
+_CHANGE_MARKS = {"changes": " Δ", "undetermined": " Δ?"}
+
+
 def _summary(results: WalkingResults) -> Table:
     """Estimate and 95 % interval per quantity and timing point; poorly determined ones in
     brackets only (never as a precise number)."""
@@ -81,8 +84,9 @@ def _summary(results: WalkingResults) -> Table:
         box=box.SIMPLE_HEAD,
         title="walking impedance: estimate [95 % interval]",
         caption="cop: lever arm, cm; model: stiffness constant or changing within the window; "
-        "Δ: stiffness changes within the window; ≈: poorly determined (interval spans zero or "
-        "exceeds ±50 %)",
+        "Δ: stiffness changes within the window; Δ?: the data cannot tell whether it changes by "
+        f"±{results.settings.change_threshold:.0%}; ≈: poorly determined (interval spans zero "
+        "or exceeds ±50 %)",
     )
     columns = ["condition", "n", "cop", "model"] + [f"{q.symbol} ({q.unit})" for q in QUANTITIES]
     for column in columns:
@@ -96,7 +100,7 @@ def _summary(results: WalkingResults) -> Table:
             cells.append(
                 f"≈ {interval}" if e.poorly_determined else f"{e.mean:{q.format}} {interval}"
             )
-        model = tp.stiffness_model + (" Δ" if tp.stiffness_changes else "")
+        model = tp.stiffness_model + _CHANGE_MARKS.get(tp.stiffness_change_verdict, "")
         table.add_row(tp.key, str(tp.n_perturbed), f"{tp.cop_m * 100:.2f}", model, *cells)
     return table
 

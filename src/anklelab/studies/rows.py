@@ -59,8 +59,8 @@ def timing_point_rows(
     -------
     list of dict
         Keys: ``direction``, ``delay_ms``, ``n_perturbed``, ``stiffness_model``,
-        ``stiffness_changes``, ``quantity`` (its ``results.json`` key), ``truth``,
-        ``estimate``, ``sd``, ``ci95_low``, ``ci95_high``, ``interval_kind``,
+        ``stiffness_changes``, ``stiffness_change_verdict``, ``quantity`` (its ``results.json``
+        key), ``truth``, ``estimate``, ``sd``, ``ci95_low``, ``ci95_high``, ``interval_kind``,
         ``poorly_determined`` (None for ``cop_m``), ``error``, ``error_percent``,
         ``half_width_percent``, ``covered`` (truth inside the interval; None without an
         interval or a truth), ``warnings``.
@@ -77,6 +77,7 @@ def timing_point_rows(
             "n_perturbed": tp.n_perturbed,
             "stiffness_model": tp.stiffness_model,
             "stiffness_changes": tp.stiffness_changes,
+            "stiffness_change_verdict": tp.stiffness_change_verdict,
         }
         quantities: list[tuple[str, Any]] = [(q.key, e) for q, e in tp.estimates().items()]
         for key, estimate in [*quantities, (COP, None)]:

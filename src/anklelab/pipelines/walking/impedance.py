@@ -27,7 +27,9 @@ of at least ``change_confidence`` (Student's t about the estimate, with the stan
 behind its interval), and never where the stiffness itself is poorly determined. Requiring
 the whole 95 % interval beyond the threshold missed 46 % of the changes of 25 % or more on the
 randomised twin, where 40 trials per point and thrice the noise leave the change's interval
-±15 % wide.
+±15 % wide. Silence is not a finding that the stiffness is constant: that is said only when the
+change's whole 95 % interval lies within ±``change_threshold`` (an equivalence test); a point
+where the data can tell neither is ``"undetermined"`` (``stiffness_change_verdict``).
 """
 
 from __future__ import annotations
@@ -232,9 +234,9 @@ def estimate_timing_point(
     weight = averages[_FULL, RESPONSE.index("angle"), :n] ** 2
     # a change relative to a stiffness the data leave open is not asserted (a 2-trial point
     # read +96 %, interval -1100 to +1300 %: Student's t with 1 degree of freedom gave 0.71)
-    changes = bool(
-        probability >= settings.change_confidence and not estimates["stiffness"].poorly_determined
-    )
+    determined = not estimates["stiffness"].poorly_determined
+    changes = bool(probability >= settings.change_confidence and determined)
+    verdict = _change_verdict(change_estimate, changes, determined, settings.change_threshold)
     warnings = _warnings(
         key,
         estimates,
@@ -256,6 +258,7 @@ def estimate_timing_point(
         stiffness_change=change_estimate,
         stiffness_changes=changes,
         stiffness_change_probability=probability,
+        stiffness_change_verdict=verdict,
         stiffness_slope=(
             _estimate(linear.stiffness_slope[0], reps, paper, len(trials))
             if model == "linear"
@@ -274,6 +277,15 @@ def estimate_timing_point(
         torque=subset_avg[:, _TORQUE, :n],
         model_torque=impedance_torque(analysis, subset_avg[:, _KIN, :n], fs),
     )
+
+
+def _change_verdict(change: Estimate, changes: bool, determined: bool, threshold: float) -> str:
+    """``"changes"``, ``"constant"`` (the change's 95 % interval within ±``threshold``: an
+    equivalence test) or ``"undetermined"`` (the data can tell neither)."""
+    if changes:
+        return "changes"
+    low, high = change.ci95
+    return "constant" if determined and -threshold < low and high < threshold else "undetermined"
 
 
 def _warnings(

@@ -146,6 +146,10 @@ class TimingPoint:
         The diagnostic's probability that the change lies beyond ``change_threshold`` on its
         estimate's side (NaN without an interval, e.g. with one trial, and
         in files written before it existed).
+    stiffness_change_verdict : {"changes", "constant", "undetermined"} or None
+        What the data say of the change: ``"changes"`` as ``stiffness_changes``; ``"constant"``
+        when its 95 % interval lies within ±``change_threshold``; ``"undetermined"`` otherwise
+        (the data can tell neither). None in files written before it existed.
     window_stiffness : dict of str to float
         Stiffness for each sensitivity window (key: window in ms, ``"75"``), N·m/rad.
     adjustment_explained : float
@@ -173,6 +177,7 @@ class TimingPoint:
     stiffness_changes: bool
     stiffness_slope: Estimate | None = None
     stiffness_change_probability: float = np.nan
+    stiffness_change_verdict: str | None = None
     window_stiffness: dict[str, float] = field(default_factory=dict)
     adjustment_explained: float = 0.0
     warnings: tuple[str, ...] = ()
@@ -207,6 +212,7 @@ class TimingPoint:
             "stiffness_model": self.stiffness_model,
             "stiffness_changes": self.stiffness_changes,
             "stiffness_change_probability": self.stiffness_change_probability,
+            "stiffness_change_verdict": self.stiffness_change_verdict,
             "window_sensitivity": {
                 key: {"stiffness_nm_per_rad": value} for key, value in self.window_stiffness.items()
             },
@@ -239,6 +245,7 @@ class TimingPoint:
                 if slope
                 else None,
                 stiffness_change_probability=_float(node.get("stiffness_change_probability")),
+                stiffness_change_verdict=node.get("stiffness_change_verdict"),
                 window_stiffness={
                     key: float(value["stiffness_nm_per_rad"])
                     for key, value in node.get("window_sensitivity", {}).items()
@@ -386,6 +393,7 @@ class WalkingResults:
                 row[f"{quantity.key}_poorly_determined"] = int(estimate.poorly_determined)
             row["stiffness_changes"] = int(tp.stiffness_changes)
             row["stiffness_change_probability"] = tp.stiffness_change_probability
+            row["stiffness_change_verdict"] = tp.stiffness_change_verdict
             for key, value in tp.window_stiffness.items():
                 row[f"stiffness_nm_per_rad_{key}ms"] = value
             match = check.get(tp.delay_ms) if tp.direction == "dorsi" else None
