@@ -268,9 +268,11 @@ def _distribution_lines(group: Sequence[dict[str, Any]]) -> list[str]:
         out.append(f"  diagnostic misses       {(~flagged[large]).mean():6.1%} of {large.sum()}")
     verdicts = np.array([str(r.get("change_verdict", "")) for r in group])
     if (verdicts != "").any():
-        for name, group in (("true change < 15 %", small), ("true change >= 25 %", large)):
+        for name, members in (("true change < 15 %", small), ("true change >= 25 %", large)):
+            if not members.any():
+                continue
             said = {
-                v: (verdicts[group] == v).mean() for v in ("changes", "constant", "undetermined")
+                v: (verdicts[members] == v).mean() for v in ("changes", "constant", "undetermined")
             }
             out.append(f"  verdicts, {name}: " + ", ".join(f"{v} {r:.1%}" for v, r in said.items()))
     return out
