@@ -84,9 +84,9 @@ def _summary(results: WalkingResults) -> Table:
         box=box.SIMPLE_HEAD,
         title="walking impedance: estimate [95 % interval]",
         caption="cop: lever arm, cm; model: stiffness constant or changing within the window; "
-        "Δ: stiffness changes within the window; Δ?: the data cannot tell whether it changes by "
-        f"±{results.settings.change_threshold:.0%}; ≈: poorly determined (interval spans zero "
-        "or exceeds ±50 %)",
+        "Δ: stiffness changes within the window; Δ?: the data cannot tell whether it changes "
+        f"by ±{100 * results.settings.change_threshold:g} %; ≈: poorly determined (interval "
+        "spans zero or exceeds ±50 %)",
     )
     columns = ["condition", "n", "cop", "model"] + [f"{q.symbol} ({q.unit})" for q in QUANTITIES]
     for column in columns:
