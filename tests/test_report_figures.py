@@ -84,6 +84,7 @@ def _results(stiffness_ci95=(np.nan, np.nan), flag_last_stiffness=False, warning
             "constant",
             Estimate(0.0, 0.0),
             False,
+            stiffness_change_verdict="undetermined" if delay_ms == 100.0 else None,
             warnings=(f"dorsi/{delay_ms:g}: a point's doubt",) if delay_ms == 475.0 else (),
         )
 
@@ -108,6 +109,8 @@ def test_intervals_are_the_ci95_when_given_else_labelled_sd():
     assert table.rows[0][3] == "1200\N{NO-BREAK SPACE}[1180,\N{NO-BREAK SPACE}1230]"
     assert table.rows[0][4].endswith("[-0.50,\N{NO-BREAK SPACE}4.50] (poorly determined)")
     assert table.rows[1][-2:] == ["1008", "+19.1"]  # 1300 - 325 * 4.5 / 5 at 10.5 cm; error
+    # the model, with the change diagnostic's verdict (none in an older file)
+    assert [row[-3] for row in table.rows] == ["constant: change undetermined", "constant"]
     assert "*" in impedance_summary_table(_results()).rows[0][3]  # mean ± 1.96 sd, marked
 
 

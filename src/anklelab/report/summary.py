@@ -119,8 +119,13 @@ def _interval(point: TimingPoint, quantity: Quantity) -> str:
     return text + (" (poorly determined)" if e.poorly_determined else "")
 
 
+_CHANGE_WORDS = {"changes": ": changes", "undetermined": ": change undetermined"}
+"""What the change diagnostic's verdict adds to the model's name (nothing when constant)."""
+
+
 def impedance_summary_table(results: WalkingResults) -> Table:
-    """One row per condition: lever arm, k, b, I with 95 % intervals, VAF, bench, error."""
+    """One row per condition: lever arm, k, b, I with 95 % intervals, VAF, the stiffness model
+    and the change diagnostic's verdict, bench, error."""
     points = results.timing_points
     bench = bench_at(results, [tp.cop_m for tp in points])
     rows = []
@@ -134,6 +139,7 @@ def impedance_summary_table(results: WalkingResults) -> Table:
                 "—" if math.isnan(tp.cop_m) else f"{100 * tp.cop_m:.1f}",
                 *(_interval(tp, q) for q in IMPEDANCE),
                 "—" if math.isnan(tp.vaf.mean) else f"{tp.vaf.mean:.1f}",
+                tp.stiffness_model + _CHANGE_WORDS.get(tp.stiffness_change_verdict, ""),
                 "—" if math.isnan(b) else f"{b:.0f}",
                 "—" if math.isnan(b) or math.isnan(k) else f"{100 * (k - b) / b:+.1f}",
             ]
@@ -147,6 +153,7 @@ def impedance_summary_table(results: WalkingResults) -> Table:
             "lever arm (cm)",
             *(f"{q.name} ({q.unit})" for q in IMPEDANCE),
             "model VAF (%)",
+            "stiffness within the window",
             "bench stiffness (N·m/rad)",
             "walking − bench (%)",
         ],
