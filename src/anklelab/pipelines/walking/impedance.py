@@ -19,7 +19,8 @@ squared bias is estimated as ``(k_const - k_lin)² - var(k_const - k_lin)`` and 
 from the resamples. A constant stiffness wins where the stiffness hardly changes (it is more
 precise); the linear one wherever the change biases the constant fit by more than that gain.
 
-**Damping and inertia come from the linear model**, whichever model gives the stiffness. A
+**Damping and inertia come from the linear model** with the automatic choice, whichever model
+gives the stiffness (a model set by hand gives all three, as paper 000's constant one). A
 stiffness that changes within the window, fitted as constant, puts its ``k' θ`` into them: the
 prosthetic foot's stiffness falls as the COP moves forward, and on the twin with every artefact
 off the constant model's damping read +1.41 N·m·s/rad high (true 3.0), the linear model's
@@ -225,10 +226,12 @@ def estimate_timing_point(
     probability = _beyond(change_estimate, settings.change_threshold, len(trials))
     full = averages[_FULL : _FULL + 1]
     shift = round(settings.timing_uncertainty_ms * fs / 1000.0)
-    # the stiffness (and the VAF) from the chosen model; damping and inertia from the linear
-    # one, whichever is chosen: a stiffness that changes within the window, fitted as
-    # constant, puts its k' θ into them (module docstring)
-    source = {"stiffness": model, "damping": "linear", "inertia": "linear", "vaf": model}
+    # the stiffness (and the VAF) from the chosen model; with the automatic choice, damping and
+    # inertia from the linear one whichever is chosen: a stiffness that changes within the
+    # window, fitted as constant, puts its k' θ into them (module docstring). A model set by
+    # hand gives all three, as paper 000's constant model does.
+    rest = "linear" if settings.stiffness_model == "auto" else model
+    source = {"stiffness": model, "damping": rest, "inertia": rest, "vaf": model}
     fitted = {"constant": constant, "linear": linear}
     systematic: dict[str, float] = {}
     by_window = None

@@ -132,8 +132,9 @@ class TimingPoint:
     stiffness, damping, inertia, vaf : Estimate
         N·m/rad (θ²-weighted over the window), N·m·s/rad, kg·m², %.
     stiffness_model : {"constant", "linear"}
-        The stiffness model the estimate comes from (chosen per timing point when the setting is
-        ``"auto"``).
+        The stiffness model the stiffness and VAF come from (chosen per timing point when the
+        setting is ``"auto"``, and then damping and inertia come from the linear model; a model
+        set by hand gives all three).
     stiffness_change : Estimate
         Change of the stiffness over the analysis window as a fraction of it, ``k₁ W / k``, from
         the linear model (always fitted).
