@@ -219,7 +219,6 @@ def estimate_timing_point(
     model = settings.stiffness_model
     if model == "auto":
         model = _focused_choice(constant.stiffness[0], linear.stiffness[0])
-    chosen = linear if model == "linear" else constant
     window_s = n / fs
     change = linear.stiffness_slope[0] * window_s / linear.stiffness[0]
     change_estimate = _estimate(change, reps, paper, len(trials))
@@ -233,11 +232,12 @@ def estimate_timing_point(
     rest = "linear" if settings.stiffness_model == "auto" else model
     source = {"stiffness": model, "damping": rest, "inertia": rest, "vaf": model}
     fitted = {"constant": constant, "linear": linear}
+    window_fits = {  # each model's fits over the sensitivity windows
+        name: _fit(full, lengths[1:], name, fs) if len(lengths) > 1 else None
+        for name in dict.fromkeys(source.values())
+    }
     systematic: dict[str, float] = {}
-    by_window = None
-    for name in dict.fromkeys(source.values()):
-        windows_fit = _fit(full, lengths[1:], name, fs) if len(lengths) > 1 else None
-        by_window = windows_fit if name == model else by_window
+    for name, windows_fit in window_fits.items():
         centre = {
             q: float(getattr(fitted[name], q)[0][_FULL]) for q in _SYSTEMATIC if source[q] == name
         }
@@ -248,7 +248,7 @@ def estimate_timing_point(
     }
     vaf = estimates["vaf"]  # a VAF cannot exceed 100 %
     estimates["vaf"] = replace(vaf, ci95=(vaf.ci95[0], min(vaf.ci95[1], 100.0)))
-    analysis = ImpedanceFit(*(values[0][paper] for values in chosen))
+    analysis = ImpedanceFit(*(values[0][paper] for values in fitted[model]))
     subset_avg = averages[paper]
     weight = averages[_FULL, RESPONSE.index("angle"), :n] ** 2
     # a change relative to a stiffness the data leave open is not asserted (a 2-trial point
@@ -284,9 +284,10 @@ def estimate_timing_point(
             else None
         ),
         window_stiffness={}
-        if by_window is None
+        if window_fits[model] is None
         else {
-            f"{w:g}": float(k) for w, k in zip(windows[1:], by_window.stiffness[:, 0], strict=True)
+            f"{w:g}": float(k)
+            for w, k in zip(windows[1:], window_fits[model].stiffness[:, 0], strict=True)
         },
         adjustment_explained=responses.explained,
         warnings=warnings,
