@@ -22,10 +22,10 @@ from scipy.integrate import solve_ivp
 from anklelab.control.motion_plan import StepDirectionPlan
 from anklelab.control.perturbation import RampHold
 from anklelab.platforms import load_platform
+from anklelab.signals.iir import butterworth_sos, resonance_sos
 from anklelab.sim import _kernels as K
 from anklelab.sim.artefacts import Artefacts
 from anklelab.sim.drivetrain import platform_constants, simulate_platform
-from anklelab.sim.forceplate_dynamics import anti_alias_sos, mode_sos
 from benchmarks._harness import Result, best_time
 
 DURATION_S = 2.0
@@ -88,9 +88,9 @@ def _scipy(params, ref: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         x = solve_ivp(rhs, (0.0, dt), x, args=(tau_cmd,), method="RK45", rtol=1e-8,
                       atol=1e-12).y[:, -1]  # fmt: skip
     fs = params.servo.position_loop_rate_hz
-    fx = signal.sosfilt(mode_sos(fp.horizontal_natural_frequency_hz, fp.damping_ratio, fs), fx)
+    fx = signal.sosfilt(resonance_sos(fp.horizontal_natural_frequency_hz, fp.damping_ratio, fs), fx)
     fx = signal.sosfilt(
-        anti_alias_sos(params.daq.anti_alias_hz, params.daq.anti_alias_order, fs), fx
+        butterworth_sos(params.daq.anti_alias_order, params.daq.anti_alias_hz, fs), fx
     )
     return motor, fx[::8]
 

@@ -2,6 +2,7 @@
 
 import numpy as np
 import pytest
+from scipy.signal import savgol_filter
 
 from anklelab.errors import ParameterError
 from anklelab.signals import derivative, kinematics
@@ -42,3 +43,19 @@ def test_kinematics_stacks_angle_velocity_acceleration_before_time():
 def test_bad_window_is_rejected(window):
     with pytest.raises(ParameterError, match="window"):
         derivative(T, FS, window)
+
+
+@pytest.mark.parametrize(
+    ("window", "polyorder", "deriv"), [(5, 2, 0), (5, 2, 1), (5, 2, 2), (7, 3, 1), (11, 4, 3)]
+)
+def test_equals_scipys_savitzky_golay_filter_ends_included(window, polyorder, deriv):
+    x = np.random.default_rng(window).standard_normal((3, 2, 200)).cumsum(axis=-1)
+    ours = derivative(np.moveaxis(x, -1, 1), FS, window, deriv=deriv, polyorder=polyorder, axis=1)
+    theirs = savgol_filter(x, window, polyorder, deriv=deriv, delta=1 / FS, mode="interp")
+    tol = 1e-12 * abs(theirs).max()
+    np.testing.assert_allclose(np.moveaxis(ours, 1, -1), theirs, rtol=0, atol=tol)
+
+
+def test_a_signal_shorter_than_the_window_is_rejected():
+    with pytest.raises(ParameterError, match=r"3 samples.*window=5"):
+        derivative(T[:3], FS, 5)

@@ -1,5 +1,5 @@
-"""The twin's fast path: NumPy filter and PCHIP designs equal SciPy's, threads change no bit,
-and analysing recorded data imports neither numba nor the twin."""
+"""The twin's fast path: its PCHIP equals SciPy's, threads change no bit, and analysing
+recorded data imports neither numba nor the twin (the filter designs: test_signals_iir.py)."""
 
 from __future__ import annotations
 
@@ -9,28 +9,10 @@ import sys
 
 import numpy as np
 import pytest
-from scipy import signal
 from scipy.interpolate import PchipInterpolator
 
 from anklelab.experiments import simulate_perturberator
 from anklelab.sim._pchip import pchip
-from anklelab.sim.forceplate_dynamics import anti_alias_sos, mode_sos
-
-
-@pytest.mark.parametrize("order", [1, 2, 3, 4, 5, 8])
-def test_butterworth_sections_filter_as_scipys(order):
-    x = np.random.default_rng(order).standard_normal(4000)
-    ours = signal.sosfilt(anti_alias_sos(400.0, order, 8000.0), x)
-    theirs = signal.sosfilt(signal.butter(order, 400.0, fs=8000.0, output="sos"), x)
-    assert np.abs(ours - theirs).max() < 1e-12 * np.abs(theirs).max()
-
-
-@pytest.mark.parametrize(("f0", "zeta"), [(300.0, 0.05), (500.0, 0.1), (2500.0, 0.7)])
-def test_mode_section_equals_the_prewarped_bilinear_transform(f0, zeta):
-    fs = 8000.0
-    wa = 2 * fs * np.tan(np.pi * f0 / fs)
-    z, p, k = signal.bilinear_zpk([], np.roots([1.0, 2 * zeta * wa, wa * wa]), wa * wa, fs)
-    np.testing.assert_allclose(mode_sos(f0, zeta, fs), signal.zpk2sos(z, p, k), atol=1e-12)
 
 
 @pytest.mark.parametrize(

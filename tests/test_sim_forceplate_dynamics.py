@@ -6,12 +6,11 @@ from scipy import signal
 
 from anklelab.forceplate import CHANNELS, resultants, sagittal_load
 from anklelab.platforms import load_platform
+from anklelab.signals.iir import butterworth_sos, resonance_sos
 from anklelab.sim.artefacts import Artefacts
 from anklelab.sim.drivetrain import GRAVITY, simulate_platform
 from anklelab.sim.forceplate_dynamics import (
-    anti_alias_sos,
     daq_quantize,
-    mode_sos,
     mounting_rotation,
     sensor_channels,
 )
@@ -75,11 +74,11 @@ def test_structural_modes_ring_at_300_and_500_hz(params, ramp):
 
 
 def test_anti_alias_filter_attenuates_above_the_daq_nyquist(params):
-    sos = anti_alias_sos(params.daq.anti_alias_hz, params.daq.anti_alias_order, FS)
+    sos = butterworth_sos(params.daq.anti_alias_order, params.daq.anti_alias_hz, FS)
     _, h = signal.sosfreqz(sos, [10.0, 500.0, 1000.0], fs=FS)
     assert abs(h[0]) == pytest.approx(1.0, abs=1e-3)
     assert abs(h[1]) < 0.5 and abs(h[2]) < 0.03
-    mode = mode_sos(500.0, 0.05, FS)
+    mode = resonance_sos(500.0, 0.05, FS)
     assert abs(signal.sosfreqz(mode, [500.0], fs=FS)[1][0]) == pytest.approx(10.0, rel=1e-3)
 
 

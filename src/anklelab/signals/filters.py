@@ -1,8 +1,4 @@
-"""Zero-phase low-pass filtering (paper 000, section 2.4.2: bidirectional Butterworth).
-
-SciPy's signal package is imported on the first filter (it costs about 0.8 s of start-up), so
-a process that only handles results or figures never loads it.
-"""
+"""Zero-phase low-pass filtering (paper 000, section 2.4.2: bidirectional Butterworth)."""
 
 from __future__ import annotations
 
@@ -12,15 +8,9 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from anklelab.errors import ParameterError
+from anklelab.signals.iir import butterworth_sos, edge_padding, sosfiltfilt
 
 __all__ = ["lowpass", "lowpass_min_samples"]
-
-
-@lru_cache(maxsize=32)
-def _butter_sos(order: int, cutoff_hz: float, fs: float) -> NDArray[np.float64]:
-    from scipy.signal import butter
-
-    return butter(order, cutoff_hz, btype="low", output="sos", fs=fs)
 
 
 def _check(fs: float, cutoff_hz: float, order: int) -> NDArray[np.float64]:
@@ -30,13 +20,10 @@ def _check(fs: float, cutoff_hz: float, order: int) -> NDArray[np.float64]:
         )
     if int(order) != order or order < 1:
         raise ParameterError(f"order: expected a positive integer, got {order!r}")
-    return _butter_sos(int(order), float(cutoff_hz), float(fs))
+    return _design(int(order), float(cutoff_hz), float(fs))
 
 
-def _padlen(sos: NDArray[np.float64]) -> int:
-    """Samples :func:`scipy.signal.sosfiltfilt` pads each end with (its default ``padlen``)."""
-    first_order = min(int((sos[:, 2] == 0).sum()), int((sos[:, 5] == 0).sum()))
-    return 3 * (2 * len(sos) + 1 - first_order)
+_design = lru_cache(maxsize=32)(butterworth_sos)
 
 
 def lowpass_min_samples(fs: float, cutoff_hz: float = 20.0, *, order: int = 4) -> int:
@@ -61,7 +48,7 @@ def lowpass_min_samples(fs: float, cutoff_hz: float = 20.0, *, order: int = 4) -
     >>> lowpass_min_samples(1000.0, 20.0, order=4)
     16
     """
-    return _padlen(_check(fs, cutoff_hz, order)) + 1
+    return edge_padding(_check(fs, cutoff_hz, order)) + 1
 
 
 def lowpass(
@@ -104,15 +91,4 @@ def lowpass(
     >>> bool(np.allclose(y[100:-100], 1.0, atol=1e-3))
     True
     """
-    sos = _check(fs, cutoff_hz, order)
-    x = np.asarray(x, dtype=float)
-    n, padlen = (x.shape[axis] if x.ndim else 1), _padlen(sos)
-    if n <= padlen:
-        raise ParameterError(
-            f"x: {n} samples along axis {axis}; the zero-phase Butterworth low-pass (order "
-            f"{order}, cutoff {cutoff_hz:g} Hz) needs at least {padlen + 1} (it pads each end "
-            f"with padlen = {padlen} samples)"
-        )
-    from scipy.signal import sosfiltfilt
-
-    return sosfiltfilt(sos, x, axis=axis)
+    return sosfiltfilt(_check(fs, cutoff_hz, order), x, axis=axis)

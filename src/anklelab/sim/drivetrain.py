@@ -55,9 +55,9 @@ from numpy.typing import NDArray
 
 from anklelab.errors import ParameterError, SafetyLimitError
 from anklelab.platforms.perturberator import PerturberatorParameters
+from anklelab.signals.iir import butterworth_sos, resonance_sos
 from anklelab.sim import _kernels as K
 from anklelab.sim.artefacts import Artefacts
-from anklelab.sim.forceplate_dynamics import anti_alias_sos, mode_sos
 
 __all__ = [
     "GRAVITY",
@@ -300,9 +300,9 @@ def simulate_platform(
         raise ParameterError(f"injection: expected shape {ref.shape}, got {inj.shape}")
     fplate = sv.position_loop_rate_hz
     fpp = params.force_plate
-    sos_v = mode_sos(fpp.vertical_natural_frequency_hz, fpp.damping_ratio, fplate)
-    sos_h = mode_sos(fpp.horizontal_natural_frequency_hz, fpp.damping_ratio, fplate)
-    sos_aa = anti_alias_sos(params.daq.anti_alias_hz, params.daq.anti_alias_order, fplate)
+    sos_v = resonance_sos(fpp.vertical_natural_frequency_hz, fpp.damping_ratio, fplate)
+    sos_h = resonance_sos(fpp.horizontal_natural_frequency_hz, fpp.damping_ratio, fplate)
+    sos_aa = butterworth_sos(params.daq.anti_alias_order, params.daq.anti_alias_hz, fplate)
     flags = np.zeros(K.N_FL, dtype=np.int64)
     flags[K.FL_FOOT] = load is not None
     flags[K.FL_PLATE] = plate

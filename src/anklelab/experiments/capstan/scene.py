@@ -29,7 +29,6 @@ from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import NDArray
-from scipy.signal import butter, sosfiltfilt
 
 from anklelab.control.haptics import VirtualEnvironment
 from anklelab.control.scene import Scene, SceneProfile, scene_profile
@@ -37,6 +36,7 @@ from anklelab.errors import ParameterError
 from anklelab.experiments.capstan.closed_loop import simulate_closed_loop
 from anklelab.experiments.capstan.config import CapstanSetup
 from anklelab.experiments.capstan.envelope import analytic_envelope
+from anklelab.signals.iir import butterworth_sos, sosfiltfilt
 from anklelab.sim.capstan import SimulationResult, voluntary_torque
 
 __all__ = ["SPLIT_HZ", "PatchMetrics", "SceneMetrics", "fit_bumps_to_envelope", "render_scene"]
@@ -190,10 +190,10 @@ def render_scene(
 
     top_speed = SPEED_MARGIN * setup.params.safety.velocity_limit_rad_s
     cutoff = SPLIT_HZ
-    slope = sosfiltfilt(butter(2, cutoff, fs=setup.fs, output="sos"), profile.slope_rad)
+    slope = sosfiltfilt(butterworth_sos(2, cutoff, setup.fs), profile.slope_rad)
     while np.max(np.abs(np.gradient(slope, 1.0 / setup.fs))) > top_speed and cutoff > 0.05:
         cutoff /= 2
-        slope = sosfiltfilt(butter(2, cutoff, fs=setup.fs, output="sos"), profile.slope_rad)
+        slope = sosfiltfilt(butterworth_sos(2, cutoff, setup.fs), profile.slope_rad)
     bumps, scales = fit_bumps_to_envelope(profile.bumps_rad, setup.fs, envelope)
     profile = dataclasses.replace(profile, slope_rad=slope, bumps_rad=bumps)
     terrain = slope + bumps
@@ -222,7 +222,7 @@ def render_scene(
         seed=rng,
     )
     error = result["angle_rad"] - terrain
-    slow = sosfiltfilt(butter(2, SPLIT_HZ, fs=setup.fs, output="sos"), error)
+    slow = sosfiltfilt(butterworth_sos(2, SPLIT_HZ, setup.fs), error)
     rigid = profile.patch < 0
     patches = []
     for k, patch in enumerate(scene.compliant):
