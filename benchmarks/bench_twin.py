@@ -21,8 +21,8 @@ from scipy.integrate import solve_ivp
 
 from anklelab.control.motion_plan import StepDirectionPlan
 from anklelab.control.perturbation import RampHold
+from anklelab.iir import butterworth_sos, resonance_sos
 from anklelab.platforms import load_platform
-from anklelab.signals.iir import butterworth_sos, resonance_sos
 from anklelab.sim import _kernels as K
 from anklelab.sim.artefacts import Artefacts
 from anklelab.sim.drivetrain import platform_constants, simulate_platform

@@ -26,6 +26,7 @@ RANK = {
     "errors": 0,
     "forceplate": 0,
     "metrics": 0,
+    "iir": 0,  # filter designs and the zero-phase filter: the twin and the analysis share them
     "platforms": 1,
     "sim": 2,
     "control": 3,

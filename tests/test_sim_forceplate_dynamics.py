@@ -5,8 +5,8 @@ import pytest
 from scipy import signal
 
 from anklelab.forceplate import CHANNELS, resultants, sagittal_load
+from anklelab.iir import butterworth_sos, resonance_sos
 from anklelab.platforms import load_platform
-from anklelab.signals.iir import butterworth_sos, resonance_sos
 from anklelab.sim.artefacts import Artefacts
 from anklelab.sim.drivetrain import GRAVITY, simulate_platform
 from anklelab.sim.forceplate_dynamics import (

@@ -4,24 +4,20 @@ Analysing recorded data never imports the digital twins and their compiled kerne
 demonstration on both twins is an application of its own, :mod:`anklelab.demo`.
 """
 
-from anklelab.pipelines.walking import (
-    STANCE_CHANNELS,
-    STEPS,
-    TimingPoint,
-    WalkingResults,
-    WalkingSettings,
-    analyze_walking,
-    fit_platform_filters,
-    load_walking_settings,
-)
+from anklelab._lazy import lazy_exports
 
-__all__ = [
-    "STANCE_CHANNELS",
-    "STEPS",
-    "TimingPoint",
-    "WalkingResults",
-    "WalkingSettings",
-    "analyze_walking",
-    "fit_platform_filters",
-    "load_walking_settings",
-]
+_EXPORTS = {
+    name: "walking"
+    for name in (
+        "STANCE_CHANNELS",
+        "STEPS",
+        "TimingPoint",
+        "WalkingResults",
+        "WalkingSettings",
+        "analyze_walking",
+        "fit_platform_filters",
+        "load_walking_settings",
+    )
+}
+__all__ = sorted(_EXPORTS)
+__getattr__, __dir__ = lazy_exports(__name__, _EXPORTS)

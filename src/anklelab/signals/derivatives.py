@@ -3,7 +3,7 @@
 A least-squares polynomial fitted to ``window`` samples centred on each time point and
 differentiated there is exactly a Savitzky-Golay filter, so the work is one FIR per derivative.
 Its weights are a few lines of least squares, computed here rather than by ``scipy.signal``,
-whose import would cost the analysis 1-1.7 s of start-up (see :mod:`anklelab.signals.iir`).
+whose import would cost the analysis 1-1.7 s of start-up (see :mod:`anklelab.iir`).
 """
 
 from __future__ import annotations

@@ -8,7 +8,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from anklelab.errors import ParameterError
-from anklelab.signals.iir import butterworth_sos, edge_padding, sosfiltfilt
+from anklelab.iir import butterworth_sos, edge_padding, sosfiltfilt
 
 __all__ = ["lowpass", "lowpass_min_samples"]
 

@@ -54,8 +54,8 @@ import numpy as np
 from numpy.typing import NDArray
 
 from anklelab.errors import ParameterError, SafetyLimitError
+from anklelab.iir import butterworth_sos, resonance_sos
 from anklelab.platforms.perturberator import PerturberatorParameters
-from anklelab.signals.iir import butterworth_sos, resonance_sos
 from anklelab.sim import _kernels as K
 from anklelab.sim.artefacts import Artefacts
 

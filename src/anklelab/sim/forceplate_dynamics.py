@@ -7,7 +7,7 @@ hinge moves, the top plate's own inertial and gravity-tilt loads, zeroed at rest
 amplifier is. The plate's structural modes are second-order low-pass resonances applied to the
 vertical group (Fz, Mx, My) and the horizontal group (Fx, Fy, Mz), followed by the amplifier's
 anti-alias low-pass, all run at the position-loop rate and then sampled by the DAQ (the filters
-are designed in closed form by :mod:`anklelab.signals.iir`). This module maps the wrench to the
+are designed in closed form by :mod:`anklelab.iir`). This module maps the wrench to the
 eight channels of the mounted plate (its ``anterior_axis``) and adds what the DAQ adds:
 per-channel drift, noise and 16-bit quantisation.
 """

@@ -36,7 +36,7 @@ from anklelab.errors import ParameterError
 from anklelab.experiments.capstan.closed_loop import simulate_closed_loop
 from anklelab.experiments.capstan.config import CapstanSetup
 from anklelab.experiments.capstan.envelope import analytic_envelope
-from anklelab.signals.iir import butterworth_sos, sosfiltfilt
+from anklelab.iir import butterworth_sos, sosfiltfilt
 from anklelab.sim.capstan import SimulationResult, voluntary_torque
 
 __all__ = ["SPLIT_HZ", "PatchMetrics", "SceneMetrics", "fit_bumps_to_envelope", "render_scene"]

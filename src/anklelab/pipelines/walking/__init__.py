@@ -27,19 +27,17 @@ Everything is read from the session (sample rate, plate geometry and mounting, s
 trial manifest); no number of the digital twin is assumed.
 """
 
-from anklelab.pipelines.walking.analysis import STEPS, analyze_walking
-from anklelab.pipelines.walking.calibration import fit_platform_filters
-from anklelab.pipelines.walking.results import TimingPoint, WalkingResults
-from anklelab.pipelines.walking.settings import WalkingSettings, load_walking_settings
-from anklelab.pipelines.walking.stance import STANCE_CHANNELS
+from anklelab._lazy import lazy_exports
 
-__all__ = [
-    "STANCE_CHANNELS",
-    "STEPS",
-    "TimingPoint",
-    "WalkingResults",
-    "WalkingSettings",
-    "analyze_walking",
-    "fit_platform_filters",
-    "load_walking_settings",
-]
+_EXPORTS = {
+    "STANCE_CHANNELS": "stance",
+    "STEPS": "analysis",
+    "TimingPoint": "results",
+    "WalkingResults": "results",
+    "WalkingSettings": "settings",
+    "analyze_walking": "analysis",
+    "fit_platform_filters": "calibration",
+    "load_walking_settings": "settings",
+}
+__all__ = sorted(_EXPORTS)
+__getattr__, __dir__ = lazy_exports(__name__, _EXPORTS)

@@ -10,7 +10,7 @@ follow it.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Any, NamedTuple
+from typing import TYPE_CHECKING, Any, NamedTuple
 
 import numpy as np
 from numpy.typing import NDArray
@@ -18,9 +18,11 @@ from numpy.typing import NDArray
 from anklelab._version import __version__
 from anklelab.errors import ResultsFormatError
 from anklelab.ident.bench import BenchStiffness, interpolate_stiffness
-from anklelab.ident.irf import PlatformFilters
 from anklelab.pipelines.walking.settings import WalkingSettings
 from anklelab.signals import Trials
+
+if TYPE_CHECKING:
+    from anklelab.ident.irf import PlatformFilters
 
 __all__ = ["QUANTITIES", "Estimate", "Quantity", "TimingPoint", "WalkingResults", "sd"]
 

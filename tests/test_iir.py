@@ -12,7 +12,7 @@ from scipy import signal
 
 from anklelab.data import save_session
 from anklelab.experiments import simulate_perturberator
-from anklelab.signals.iir import butterworth_sos, edge_padding, resonance_sos, sosfiltfilt
+from anklelab.iir import butterworth_sos, edge_padding, resonance_sos, sosfiltfilt
 
 
 @pytest.mark.parametrize("order", [1, 2, 3, 4, 5, 8])
