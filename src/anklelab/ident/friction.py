@@ -37,7 +37,6 @@ from numba import njit
 from numpy.lib.stride_tricks import sliding_window_view
 from numpy.typing import ArrayLike, NDArray
 from scipy.optimize import least_squares
-from scipy.signal import savgol_filter
 
 from anklelab._params import parameters_from_mapping, read_parameter_document
 from anklelab.data.capstan_ident import IdentData, IdentRun
@@ -45,6 +44,7 @@ from anklelab.errors import ParameterError, SessionFormatError
 from anklelab.ident._base import Estimator, interval
 from anklelab.metrics import vaf
 from anklelab.platforms.capstan import FrictionParameters
+from anklelab.signals import derivative
 from anklelab.sim.capstan.friction_law import friction_array, friction_step, friction_torque
 
 __all__ = ["FrictionIdentifier", "SpindownFit", "read_friction_json"]
@@ -469,10 +469,12 @@ class FrictionIdentifier(Estimator):
             angle = np.cumsum(run.velocity_rad_s) / fs
             if angle.size < 2 * width:
                 continue
-            w = savgol_filter(angle, width, 2, deriv=1, delta=1.0 / fs)
-            accel = savgol_filter(angle, width, 2, deriv=2, delta=1.0 / fs)
+            w = derivative(angle, fs, width, deriv=1)
+            accel = derivative(angle, fs, width, deriv=2)
             # torque k acts over [t_k, t_k+1) while angle k is at t_k: average it the same way
-            torque = savgol_filter(np.r_[run.torque_nm[0], run.torque_nm[:-1]], width, 0)
+            torque = derivative(
+                np.r_[run.torque_nm[0], run.torque_nm[:-1]], fs, width, deriv=0, polyorder=0
+            )
             half = width // 2
             slowest = sliding_window_view(np.abs(w), width).min(1)
             same = sliding_window_view(np.sign(w), width)
