@@ -10,13 +10,15 @@ zero differs between tests).
 from __future__ import annotations
 
 from collections.abc import Sequence
-from typing import NamedTuple
+from typing import TYPE_CHECKING, NamedTuple
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from anklelab.data.session import BenchTest
 from anklelab.errors import ParameterError
+
+if TYPE_CHECKING:
+    from anklelab.data.session import BenchTest
 
 __all__ = ["BenchStiffness", "bench_stiffness", "interpolate_stiffness"]
 

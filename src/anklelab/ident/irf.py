@@ -13,6 +13,9 @@ paper uses the acceleration alone; a tilting plate also loads its sensors throug
 proportion to the angle, so both pathways are the default here: the angle through a static gain
 (the gravity tilt) and the acceleration through a 100-lag filter (the plate's inertia, spread by
 the resonance of the drivetrain that carries it).
+
+SciPy's FFT and linear algebra are imported where they are used: the figure workers that draw
+a fitted filter unpickle this module but never fit or apply one.
 """
 
 from __future__ import annotations
@@ -25,8 +28,6 @@ from typing import Any, ClassVar, Literal, get_args
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
-from scipy.fft import irfft, next_fast_len, rfft
-from scipy.linalg import eigh, solve, solve_toeplitz
 
 from anklelab._atomic import write_text_atomic
 from anklelab._params import read_parameter_document
@@ -177,6 +178,8 @@ class ImpulseResponse(Estimator):
         phi = blocks.transpose(0, 2, 1, 3).reshape(n_in * n_lags, n_in * n_lags)[used][:, used]
         rhs = uy[:, :, :n_lags].transpose(0, 2, 1).reshape(n_in * n_lags, n_out)[used]
         if self.method == "toeplitz":
+            from scipy.linalg import solve, solve_toeplitz
+
             if n_in == 1:
                 h = solve_toeplitz(uu[0, 0, :n_lags], rhs)
             else:
@@ -215,6 +218,8 @@ def _filter(u: ArrayLike, irf: NDArray[np.float64]) -> NDArray[np.float64]:
     if u.shape[-2] != irf.shape[1]:
         raise ParameterError(f"u: expected {irf.shape[1]} inputs, got {u.shape[-2]}")
     n = u.shape[-1]
+    from scipy.fft import irfft, next_fast_len, rfft
+
     nfft = next_fast_len(n + irf.shape[-1] - 1, real=True)
     spectrum = np.einsum("...if,oif->...of", rfft(u, nfft), rfft(irf, nfft))
     return irfft(spectrum, nfft)[..., :n]
@@ -229,6 +234,8 @@ def _correlations(
     ``uy[i, c, k] = sum_n u_i[n] y_c[n+k] / N`` with ``N`` the total number of samples.
     """
     n = u.shape[-1]
+    from scipy.fft import irfft, next_fast_len, rfft
+
     nfft = next_fast_len(n + n_lags, real=True)
     fu = rfft(u.reshape(-1, *u.shape[-2:]), nfft)
     fy = rfft(y.reshape(-1, *y.shape[-2:]), nfft)
@@ -252,6 +259,8 @@ def _pinv_mdl(
     over outputs) and the number kept minimises ``R(m) * (1 + m ln N / N)``, ``R(m)`` being the
     unexplained normalised variance.
     """
+    from scipy.linalg import eigh
+
     lam, vec = eigh(phi)
     usable = lam > lam[-1] * phi.shape[0] * np.finfo(float).eps
     lam, vec = lam[usable], vec[:, usable]
