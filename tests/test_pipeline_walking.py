@@ -590,6 +590,28 @@ def test_short_calibration_trial_is_a_clear_error_naming_the_file(small, index):
         analyze_walking(session, filters=filters)
 
 
+def test_the_filters_are_handed_over_before_the_walking_trials_are_processed(small):
+    seen = []
+
+    def ready(filters):
+        seen.append((filters, list(steps)))
+
+    steps = []
+    results = analyze_walking(
+        small.session,
+        WalkingSettings(bootstrap_reps=2),
+        progress=steps.append,
+        filters_ready=ready,
+    )
+    assert len(seen) == 1
+    filters, steps_then = seen[0]
+    assert filters is results.filters and steps_then == ["platform filters"]
+    given = []  # filters fitted earlier are handed over too
+    settings = WalkingSettings(bootstrap_reps=2)
+    analyze_walking(small.session, settings, filters=filters, filters_ready=given.append)
+    assert given == [filters]
+
+
 def test_settings_are_validated():
     with pytest.raises(ValueError, match="derivative_window"):
         WalkingSettings(derivative_window=4)

@@ -54,15 +54,24 @@ def test_a_figure_that_fails_to_draw_raises_in_the_caller_and_the_workers_stop()
 def test_the_walking_figures_saved_by_workers_match_those_drawn_here(tmp_path):
     from anklelab.experiments import simulate_perturberator
     from anklelab.pipelines import WalkingSettings, analyze_walking
-    from anklelab.report.figures_walking import WALKING_FIGURES, save_walking_figures
+    from anklelab.report.figures_walking import (
+        WALKING_FIGURES,
+        save_walking_figures,
+        submit_filters_figure,
+    )
 
     session = simulate_perturberator(trials_per_point=4, n_unperturbed=8, n_calibration=2, seed=3)
     results = analyze_walking(session, WalkingSettings(bootstrap_reps=5))
     here = save_walking_figures(results, tmp_path / "here")
     with FigureRenderer(["anklelab.report.figures_walking"], processes=2) as renderer:
         there = save_walking_figures(results, tmp_path / "workers", renderer)
-    assert [p.stem for p in there] == list(WALKING_FIGURES)
+        # the filters' figure started early (as `anklelab analyze` does) is not drawn again
+        early = submit_filters_figure(results.filters, renderer)
+        assert early.names == ("filters",)
+        ahead = save_walking_figures(results, tmp_path / "early", renderer, submitted=early)
+    assert [p.stem for p in there] == [p.stem for p in ahead] == list(WALKING_FIGURES)
     assert [p.read_bytes() for p in there] == [p.read_bytes() for p in here]
+    assert [p.read_bytes() for p in ahead] == [p.read_bytes() for p in here]
 
 
 def test_without_worker_processes_the_figures_are_drawn_here(monkeypatch):
@@ -84,6 +93,16 @@ def test_a_worker_that_dies_leaves_the_figures_to_the_calling_process():
         rendered = renderer.render(dies_in_workers, (2.0, os.getpid()), NAMES)
         assert renderer._pool is None  # the broken pool is shut down
     assert rendered == expected
+
+
+def test_submitted_figures_are_drawn_while_the_caller_goes_on_even_if_a_worker_dies():
+    expected = FigureRenderer(processes=1).render(draw, 2.0, NAMES)
+    with FigureRenderer([__name__], processes=2) as renderer:
+        pending = renderer.submit(draw, 2.0, NAMES)
+        dying = renderer.submit(dies_in_workers, (2.0, os.getpid()), NAMES)
+        assert pending.names == dying.names == tuple(NAMES)
+        assert dying.result() == expected  # drawn here once the pool broke
+        assert pending.result() == expected  # whether or not it was drawn before the break
 
 
 def test_data_that_cannot_be_sent_to_the_workers_is_drawn_here():

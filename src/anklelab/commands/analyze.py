@@ -29,7 +29,7 @@ from anklelab.commands._progress_bars import recording_progress
 if TYPE_CHECKING:
     from anklelab.data.session import Session
     from anklelab.pipelines.walking import WalkingResults
-    from anklelab.report.render import FigureRenderer
+    from anklelab.report.render import FigureRenderer, PendingFigures
 
 __all__ = ["analyze", "trials_table", "write_csv"]
 
@@ -173,6 +173,14 @@ def analyze(
         step = task("analysing")
         total = len(STEPS) + 1 + figures
         names = list(STEPS)
+        early: list[PendingFigures] = []  # the filters' figure, drawn while the analysis runs
+
+        def draw_filters(fitted: PlatformFilters) -> None:
+            if renderer is not None:
+                from anklelab.report.figures_walking import submit_filters_figure
+
+                early.append(submit_filters_figure(fitted, renderer))
+
         with warnings.catch_warnings():  # its warnings are printed below, with the summary
             warnings.simplefilter("ignore", AnklelabWarning)
             results = analyze_walking(
@@ -180,6 +188,7 @@ def analyze(
                 settings,
                 filters=filters,
                 progress=lambda name: step(names.index(name), total),
+                filters_ready=draw_filters,
             )
         step(len(STEPS), total)
         sha256 = session_hash(session_path)
@@ -190,7 +199,8 @@ def analyze(
         if figures:
             from anklelab.report.figures_walking import save_walking_figures
 
-            save_walking_figures(results, run.directory, renderer)
+            submitted = early[0] if early else None
+            save_walking_figures(results, run.directory, renderer, submitted=submitted)
         run.settings.update(settings.model_dump(mode="json"), figures=figures)
         run.add_input(session_path, sha256)
         run.add_input(settings_file)

@@ -18,7 +18,7 @@ import numpy as np
 
 from anklelab._atomic import write_bytes_atomic
 from anklelab.report.figures_impedance import impedance_figure
-from anklelab.report.render import FigureRenderer
+from anklelab.report.render import FigureRenderer, PendingFigures
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
@@ -230,13 +230,28 @@ def walking_figures(results: WalkingResults) -> dict[str, Figure]:
     return {name: walking_figure(results, name) for name in WALKING_FIGURES}
 
 
+def submit_filters_figure(filters: PlatformFilters, renderer: FigureRenderer) -> PendingFigures:
+    """Start drawing the ``filters`` figure in ``renderer``'s workers and return at once: the
+    filters are fitted first, so their figure is drawn while the rest of the analysis runs."""
+    return renderer.submit(_filters_figure, filters, ["filters"])
+
+
+def _filters_figure(filters: PlatformFilters, name: str) -> Figure:
+    return filters_figure(filters)
+
+
 def save_walking_figures(
-    results: WalkingResults, directory: str | Path, renderer: FigureRenderer | None = None
+    results: WalkingResults,
+    directory: str | Path,
+    renderer: FigureRenderer | None = None,
+    *,
+    submitted: PendingFigures | None = None,
 ) -> list[Path]:
     """Write every walking figure as ``DIRECTORY/<name>.png`` (atomically); returns the paths.
 
     ``renderer`` draws them in its worker processes (see :class:`~.render.FigureRenderer`);
-    without one they are drawn here, one after another.
+    without one they are drawn here, one after another. ``submitted``: figures already on their
+    way (from :func:`submit_filters_figure`), which are not drawn again.
     """
     directory = Path(directory)
     directory.mkdir(parents=True, exist_ok=True)
@@ -244,5 +259,8 @@ def save_walking_figures(
     stance = results.stance
     picked = None if stance is None else stance.pick([name for name, *_ in _STANCE_DRAWN])
     drawn = replace(results, stance=picked)
-    pngs = (renderer or FigureRenderer(processes=1)).render(walking_figure, drawn, WALKING_FIGURES)
-    return [write_bytes_atomic(directory / f"{name}.png", png) for name, png in pngs.items()]
+    early = submitted.names if submitted is not None else ()
+    names = [name for name in WALKING_FIGURES if name not in early]
+    pending = (renderer or FigureRenderer(processes=1)).submit(walking_figure, drawn, names)
+    pngs = (submitted.result() if submitted is not None else {}) | pending.result()
+    return [write_bytes_atomic(directory / f"{name}.png", pngs[name]) for name in WALKING_FIGURES]

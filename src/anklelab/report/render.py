@@ -26,7 +26,7 @@ import pickle
 import signal
 import threading
 from collections.abc import Callable, Iterator, Sequence
-from concurrent.futures import ProcessPoolExecutor
+from concurrent.futures import CancelledError, Future, ProcessPoolExecutor
 from concurrent.futures.process import BrokenProcessPool
 from contextlib import contextmanager
 from multiprocessing import get_context
@@ -36,7 +36,7 @@ from typing import Any, TypeVar
 
 from anklelab.report.html import figure_png
 
-__all__ = ["FigureRenderer"]
+__all__ = ["FigureRenderer", "PendingFigures"]
 
 T = TypeVar("T")
 
@@ -138,6 +138,13 @@ class FigureRenderer:
         them (``data`` pickled once for all). An exception raised while drawing is raised here,
         with its traceback.
         """
+        return self.submit(draw, data, names).result()
+
+    def submit(
+        self, draw: Callable[[T, str], Any], data: T, names: Sequence[str]
+    ) -> PendingFigures:
+        """As :meth:`render`, but return at once: the workers draw while the caller goes on,
+        and :meth:`PendingFigures.result` waits for the PNG bytes."""
         if self._pool is not None:
             try:
                 payload = pickle.dumps(data, protocol=pickle.HIGHEST_PROTOCOL)
@@ -147,10 +154,11 @@ class FigureRenderer:
             else:
                 try:
                     tasks = {name: self._pool.submit(_png, draw, payload, name) for name in names}
-                    return {name: task.result() for name, task in tasks.items()}
-                except BrokenProcessPool:  # a worker died (killed, out of memory): drawn here
+                except BrokenProcessPool:
                     self.close()
-        return {name: figure_png(draw(data, name)) for name in names}
+                else:
+                    return PendingFigures(self, draw, data, tasks)
+        return PendingFigures(self, draw, data, dict.fromkeys(names))
 
     def close(self) -> None:
         """Stop the workers (waiting for any task they are running); idempotent."""
@@ -168,3 +176,39 @@ class FigureRenderer:
         traceback: TracebackType | None,
     ) -> None:
         self.close()
+
+
+class PendingFigures:
+    """Figures submitted to a :class:`FigureRenderer`; :meth:`result` returns their PNG bytes.
+
+    A figure whose worker died (killed, out of memory), or that no worker was sent, is drawn in
+    the calling process when the result is asked for: slower, never missing.
+    """
+
+    def __init__(
+        self,
+        renderer: FigureRenderer,
+        draw: Callable[[Any, str], Any],
+        data: Any,
+        tasks: dict[str, Future[bytes] | None],
+    ) -> None:
+        self._renderer, self._draw, self._data, self._tasks = renderer, draw, data, tasks
+
+    @property
+    def names(self) -> tuple[str, ...]:
+        """The figures' names, in the order submitted."""
+        return tuple(self._tasks)
+
+    def result(self) -> dict[str, bytes]:
+        """PNG bytes by name, in the order submitted (waiting for the workers)."""
+        pngs = {}
+        for name, task in self._tasks.items():
+            try:
+                pngs[name] = task.result() if task is not None else None
+            except (BrokenProcessPool, CancelledError):  # a worker died; the rest were cancelled
+                self._renderer.close()
+                pngs[name] = None
+        return {
+            name: png if png is not None else figure_png(self._draw(self._data, name))
+            for name, png in pngs.items()
+        }

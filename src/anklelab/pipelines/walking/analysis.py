@@ -38,6 +38,7 @@ def analyze_walking(
     *,
     filters: PlatformFilters | None = None,
     progress: Callable[[str], None] | None = None,
+    filters_ready: Callable[[PlatformFilters], None] | None = None,
 ) -> WalkingResults:
     """Ankle stiffness, damping and inertia per timing point and direction, with bootstrap.
 
@@ -52,6 +53,9 @@ def analyze_walking(
         then scored on every calibration trial of ``session`` (if it has any).
     progress : callable, optional
         Called with each name of :data:`STEPS` as that step starts.
+    filters_ready : callable, optional
+        Called with the platform filters once they are fitted (or checked, when given), before
+        the walking trials are processed: ``anklelab analyze`` starts drawing them meanwhile.
 
     Returns
     -------
@@ -74,6 +78,8 @@ def analyze_walking(
         filter_vaf, filter_vaf_by_channel = score_filters(
             filters, session.calibration, plate, settings.force_delay_samples(fs)
         )
+    if filters_ready is not None:
+        filters_ready(filters)
     report(STEPS[1])
     stance, mislabelled = stance_trials(session, settings, filters)
     unperturbed = stance["none"]
