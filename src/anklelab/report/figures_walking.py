@@ -32,6 +32,7 @@ __all__ = [
     "model_fit_figure",
     "save_walking_figures",
     "stance_figure",
+    "submit_filters_figure",
     "walking_figure",
     "walking_figures",
 ]
