@@ -176,10 +176,9 @@ def analyze(
         early: list[PendingFigures] = []  # the filters' figure, drawn while the analysis runs
 
         def draw_filters(fitted: PlatformFilters) -> None:
-            if renderer is not None:
-                from anklelab.report.figures_walking import submit_filters_figure
+            from anklelab.report.figures_walking import submit_filters_figure
 
-                early.append(submit_filters_figure(fitted, renderer))
+            early.append(submit_filters_figure(fitted, renderer))
 
         with warnings.catch_warnings():  # its warnings are printed below, with the summary
             warnings.simplefilter("ignore", AnklelabWarning)
@@ -188,7 +187,7 @@ def analyze(
                 settings,
                 filters=filters,
                 progress=lambda name: step(names.index(name), total),
-                filters_ready=draw_filters,
+                filters_ready=draw_filters if figures else None,
             )
         step(len(STEPS), total)
         sha256 = session_hash(session_path)
