@@ -8,6 +8,10 @@ coupler, hinge with the force plate, Coulomb/viscous losses, torque limit), the 
 the hinge, and the force plate's signal chain (top-plate inertial and gravity-tilt loads,
 structural modes and the anti-alias filter, run at the position-loop rate).
 
+Speed: inside the time-stepping loop the state, the platform constants and the foot's scalars
+are tuples (values in registers), and no helper that branches takes an array: numba counts the
+references of arrays passed to inlined helpers atomically, which cost a quarter of the time.
+
 Conventions: angles and torques referred to the platform output, dorsiflexion positive. Plate
 vectors are in the *sagittal plate frame*: Kistler axes (x anterior, y right, z down) of the
 tilted plate, origin at the centre of the sensor plane; a dorsiflexion is a positive rotation
@@ -39,8 +43,8 @@ N_FP = 7
 G_X, G_Y, G_Z, G_TNOM, G_CY, G_K, G_B, G_CONTACT = range(8)
 N_G = 8
 # flags
-FL_FOOT, FL_PLATE, FL_INERTIA, FL_RESON, FL_AA, FL_LOOP, FL_NSUB, FL_RESUME = range(8)
-N_FL = 8
+FL_FOOT, FL_PLATE, FL_INERTIA, FL_LOOP, FL_NSUB, FL_RESUME = range(6)
+N_FL = 6
 # snapshot of a trial's state at the start of a step: plant, then controller
 S_INTEG, S_TH0, S_FLAT, S_VCMD, S_TAU, S_ENC = range(7, 13)
 N_SNAP = 13
@@ -52,39 +56,60 @@ L_ENC, L_CTRL, L_CMD = range(3)
 
 
 @njit(cache=True, inline="always")
-def _gait_at(g, t, fs, out):
-    """Linear interpolation of the gait samples ``g`` (n_samples, N_G) at time ``t`` (zero
-    outside the record)."""
+def _gait_index(t, fs, n_samples):
+    """Where the gait samples (rate ``fs``) are interpolated at time ``t``: ``(i, f, inside)``,
+    the sample before ``t``, the fraction of the interval, and whether ``t`` lies within the
+    record (outside it the channels read zero)."""
     x = t * fs
     i = math.floor(x)
-    n = g.shape[0]
-    if i < 0 or i >= n - 1:
-        for c in range(N_G):
-            out[c] = 0.0
-        return
-    f = x - i
-    for c in range(N_G):
-        out[c] = g[i, c] + f * (g[i + 1, c] - g[i, c])
+    return i, x - i, 0 <= i < n_samples - 1
 
 
 @njit(cache=True, inline="always")
-def _rhs(s, tau_cmd, gv, pc, fp, shell, th0, fric, c, sn, d):
-    """Derivative ``d`` of the state ``s = (tau, thm, wm, thh, wh, thf, wf)``.
+def _row8(a):
+    """The eight gait channels ``a`` as a tuple."""
+    return (a[0], a[1], a[2], a[3], a[4], a[5], a[6], a[7])
 
-    Returns ``(T_A, Lx, Lz)``.
 
-    ``T_A`` is the external dorsiflexing moment on the foot about the ankle, ``(Lx, Lz)`` the
-    foot's load on the plate in the sagittal plate frame. While the foot is flat on the plate
-    (``G_CONTACT``) its angles count from ``th0``, the hinge angle at foot flat. The Coulomb
-    friction ``fric`` and the hinge tilt's ``c = cos(thh)``, ``sn = sin(thh)`` are evaluated
-    once per integration step (they change little within one).
+@njit(cache=True, inline="always")
+def _axpy(s, a, d):
+    """``s + a d`` for 7-tuples."""
+    return (
+        s[0] + a * d[0], s[1] + a * d[1], s[2] + a * d[2], s[3] + a * d[3], s[4] + a * d[4],
+        s[5] + a * d[5], s[6] + a * d[6],
+    )  # fmt: skip
+
+
+@njit(cache=True, inline="always")
+def _rk4_update(s, a, k1, k2, k3, k4):
+    """``s + a (k1 + 2 k2 + 2 k3 + k4)`` for 7-tuples."""
+    return (
+        s[0] + a * (k1[0] + 2.0 * k2[0] + 2.0 * k3[0] + k4[0]),
+        s[1] + a * (k1[1] + 2.0 * k2[1] + 2.0 * k3[1] + k4[1]),
+        s[2] + a * (k1[2] + 2.0 * k2[2] + 2.0 * k3[2] + k4[2]),
+        s[3] + a * (k1[3] + 2.0 * k2[3] + 2.0 * k3[3] + k4[3]),
+        s[4] + a * (k1[4] + 2.0 * k2[4] + 2.0 * k3[4] + k4[4]),
+        s[5] + a * (k1[5] + 2.0 * k2[5] + 2.0 * k3[5] + k4[5]),
+        s[6] + a * (k1[6] + 2.0 * k2[6] + 2.0 * k3[6] + k4[6]),
+    )
+
+
+@njit(cache=True, inline="always")
+def _rhs(s, tau_cmd, gv, pc, fp, shell, th0, fric, c, sn):
+    """Derivative of the state ``s = (tau, thm, wm, thh, wh, thf, wf)``.
+
+    Returns ``(d, T_A, Lx, Lz)``: the derivative (a 7-tuple), the external dorsiflexing moment
+    on the foot about the ankle, and the foot's load on the plate in the sagittal plate frame.
+    ``gv`` holds the gait channels, ``pc`` the platform constants and ``fp`` the trial's foot
+    scalars (tuples). While the foot is flat on the plate (``G_CONTACT``) its angles count from
+    ``th0``, the hinge angle at foot flat. The Coulomb friction ``fric`` and the hinge tilt's
+    ``c = cos(thh)``, ``sn = sin(thh)`` are evaluated once per integration step (they change
+    little within one).
     """
-    tau, thm, wm, thh, wh, thf, wf = s[0], s[1], s[2], s[3], s[4], s[5], s[6]
-    d[0] = (tau_cmd - tau) * pc[INV_TC]
+    tau, thm, wm, thh, wh, thf, wf = s
+    d0 = (tau_cmd - tau) * pc[INV_TC]
     ts = pc[K_S] * (thm - thh) + pc[C_S] * (wm - wh)
-    d[1] = wm
-    d[2] = (tau - ts - pc[B_M] * wm - fric) / pc[J_M]
-    d[3] = wh
+    d2 = (tau - ts - pc[B_M] * wm - fric) / pc[J_M]
     hinge = ts - pc[B_H] * wh - pc[K_G] * sn
     contact = gv[G_CONTACT]
     ex = fp[F_XA] - pc[X_H]
@@ -100,35 +125,23 @@ def _rhs(s, tau_cmd, gv, pc, fp, shell, th0, fric, c, sn, d):
         dphi = wf + m * wh
         tsh = fp[F_KSH] * (thh - thf) + fp[F_BSH] * (wh - wf)
         ta = gv[G_TNOM] + tsh
-        d[5] = wf
-        d[6] = (tsh - k * phi - b * dphi) / fp[F_IF]
-        d[4] = (hinge - ta - ex * lz - ez * lx) / pc[J_H]
+        d5 = wf
+        d6 = (tsh - k * phi - b * dphi) / fp[F_IF]
+        d4 = (hinge - ta - ex * lz - ez * lx) / pc[J_H]
     else:
         inertia = contact * fp[F_IF]
         rest = gv[G_TNOM] + (1.0 + m) * (k * (thh - th0) + b * wh)
-        d[4] = (hinge - rest - ex * lz - ez * lx) / (pc[J_H] + inertia)
-        ta = rest + inertia * d[4]
-        d[5] = wh
-        d[6] = d[4]
-    return ta, lx, lz
+        d4 = (hinge - rest - ex * lz - ez * lx) / (pc[J_H] + inertia)
+        ta = rest + inertia * d4
+        d5 = wh
+        d6 = d4
+    return (d0, wm, d2, wh, d4, d5, d6), ta, lx, lz
 
 
 @njit(cache=True, inline="always")
-def _biquad(x, sos, z, row):
-    """Filter one sample through the cascade ``sos`` with state ``z[row]`` (direct form II T)."""
-    y = x
-    for k in range(sos.shape[0]):
-        b0, b1, b2, a1, a2 = sos[k, 0], sos[k, 1], sos[k, 2], sos[k, 4], sos[k, 5]
-        out = b0 * y + z[row, 2 * k]
-        z[row, 2 * k] = b1 * y - a1 * out + z[row, 2 * k + 1]
-        z[row, 2 * k + 1] = b2 * y - a2 * out
-        y = out
-    return y
-
-
-@njit(cache=True, inline="always")
-def _plate_wrench(s, d, ta, lx, lz, gv, pc, fp, inertia, c, sn, w):
-    """Load on the sensors (sagittal plate frame, about the sensor-plane centre) into ``w``."""
+def _plate_wrench(wh, ah, ta, lx, lz, gv, pc, fp, inertia, c, sn):
+    """Load on the sensors (sagittal plate frame, about the sensor-plane centre), a 6-tuple;
+    ``wh``, ``ah`` are the hinge's speed and acceleration."""
     az0 = pc[AZ0]
     ly = -gv[G_Y]
     cy = gv[G_CY]
@@ -139,7 +152,6 @@ def _plate_wrench(s, d, ta, lx, lz, gv, pc, fp, inertia, c, sn, w):
     fz = lz
     my = az0 * lx - xa * lz - ta - lx * dz
     if inertia:
-        wh, ah = s[4], d[4]
         rx = pc[X_T] - pc[X_H]
         rz = pc[Z_T] - (az0 - pc[H_H])
         ax = ah * rz - wh * wh * rx
@@ -151,32 +163,28 @@ def _plate_wrench(s, d, ta, lx, lz, gv, pc, fp, inertia, c, sn, w):
         fx += fxa
         fz += fza
         my += pc[Z_T] * fxa - pc[X_T] * fza - pc[I_T] * ah
-    w[0] = fx
-    w[1] = ly
-    w[2] = fz
-    w[3] = cy * lz - az0 * ly
-    w[4] = my
-    w[5] = cx * ly - cy * lx
+    return fx, ly, fz, cy * lz - az0 * ly, my, cx * ly - cy * lx
 
 
 @njit(cache=True, nogil=True)
 def run_batch(
-    pc, fp, g, gait_fs, ref, inj, flags, sos_v, sos_h, sos_aa, plate_every, rec_every,
+    pc, fp, g, gait_fs, ref, inj, flags, plate_sos, plate_sections, plate_every, rec_every,
     span, resume, fork, enc_fault, enc_jump, mech, wrench, loop, snap, fault,
 ):  # fmt: skip
     """Simulate each trial of a batch; fills ``mech``, ``wrench`` and ``loop`` in place.
 
     Parameters
     ----------
-    pc : (N_PC,) platform constants.
+    pc : (N_PC,) tuple of the platform constants.
     fp : (n_trials, N_FP) foot scalars.
     g : (n_trials, n_gait, N_G) gait channels sampled at ``gait_fs``.
     ref : (n_trials, n_ticks) position reference at the position-loop ticks, rad.
     inj : (n_trials, n_ticks) or (n_trials, 0) velocity command added at the position-loop
         output (loop measurements), rad/s.
     flags : (N_FL,) int switches; ``flags[FL_NSUB]`` physics sub-steps per velocity step.
-    sos_v, sos_h, sos_aa : second-order sections at the plate rate (vertical mode, horizontal
-        mode, anti-alias).
+    plate_sos : (N_WRENCH, n_sections, 6) second-order sections at the plate rate that filter
+        each wrench component in turn (structural mode, then anti-alias); only the first
+        ``plate_sections[c]`` of component ``c`` are used.
     plate_every, rec_every : velocity steps per plate tick / per recorded sample.
     span : (n_trials, 2) first and end velocity step simulated.
     resume : (n_trials, N_SNAP) state at the first step (used with ``flags[FL_RESUME]``).
@@ -196,44 +204,49 @@ def run_batch(
     """
     n_trials, n_ticks = ref.shape
     n_steps = 2 * n_ticks
+    n_gait = g.shape[1]
     n_sub = flags[FL_NSUB]
     dt = pc[DT]
     h = dt / n_sub
-    shell_any = flags[FL_FOOT] == 1
-    s = np.zeros(7)
-    k1 = np.zeros(7)
-    k2 = np.zeros(7)
-    k3 = np.zeros(7)
-    k4 = np.zeros(7)
-    tmp = np.zeros(7)
+    hh = 0.5 * h
+    h6 = h / 6.0
+    foot = flags[FL_FOOT] == 1
     gv = np.zeros(N_G)
     gv1 = np.zeros(N_G)
     gvm = np.zeros(N_G)
     w = np.zeros(N_WRENCH)
-    zr = np.zeros((N_WRENCH, 2 * max(sos_v.shape[0], sos_h.shape[0])))
-    za = np.zeros((N_WRENCH, 2 * sos_aa.shape[0]))
+    z = np.zeros((N_WRENCH, 2 * plate_sos.shape[1]))  # the filters' states (direct form II T)
     has_inj = inj.shape[1] > 0
-    foot = flags[FL_FOOT] == 1
     for n in range(n_trials):
-        zr[:, :] = 0.0
-        za[:, :] = 0.0
-        shell = shell_any and fp[n, F_KSH] > 0.0
+        z[:, :] = 0.0
+        fpn = (fp[n, 0], fp[n, 1], fp[n, 2], fp[n, 3], fp[n, 4], fp[n, 5], fp[n, 6])
+        shell = foot and fpn[F_KSH] > 0.0
         if flags[FL_RESUME] == 1:
-            s[:] = resume[n, :7]
+            s = (
+                resume[n, 0], resume[n, 1], resume[n, 2], resume[n, 3], resume[n, 4],
+                resume[n, 5], resume[n, 6],
+            )  # fmt: skip
             integ, th0, flat = resume[n, S_INTEG], resume[n, S_TH0], resume[n, S_FLAT] > 0.0
             vcmd, tau_next, enc_prev = resume[n, S_VCMD], resume[n, S_TAU], resume[n, S_ENC]
         else:
-            s[:] = 0.0
+            s = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
             integ, th0, flat, vcmd, tau_next, enc_prev = 0.0, 0.0, False, 0.0, 0.0, 0.0
         code = 0
         locked = False
         lock_angle = held = 0.0
         j0 = span[n, 0]
         last_frame = j0 - 1
+        if foot:  # the gait at the first step
+            i, f, inside = _gait_index(j0 * dt, gait_fs, n_gait)
+            for c in range(N_G):
+                gv1[c] = g[n, i, c] + f * (g[n, i + 1, c] - g[n, i, c]) if inside else 0.0
+        plate_phase = j0 % plate_every  # j % plate_every, without a division per step
+        rec_phase = j0 % rec_every
         for j in range(j0, min(span[n, 1], n_steps)):
             t = j * dt
             if j == fork[n]:
-                snap[n, :7] = s
+                for c in range(7):
+                    snap[n, c] = s[c]
                 snap[n, S_INTEG], snap[n, S_TH0], snap[n, S_FLAT] = integ, th0, 1.0 if flat else 0.0
                 snap[n, S_VCMD], snap[n, S_TAU], snap[n, S_ENC] = vcmd, tau_next, enc_prev
             # drive: encoder, position loop (every second velocity step), velocity PI
@@ -293,44 +306,44 @@ def run_batch(
             enc_prev = enc
             # plant: RK4 sub-steps with the torque command held
             for q in range(n_sub):
-                tq = t + q * h
-                if foot:
-                    if j == j0 and q == 0:
-                        _gait_at(g[n], tq, gait_fs, gv)
-                    else:  # the previous step's end
-                        for c in range(N_G):
-                            gv[c] = gv1[c]
-                    _gait_at(g[n], tq + h, gait_fs, gv1)
+                if foot:  # the gait at the sub-step's start (the previous end) and end
+                    i, f, inside = _gait_index(t + q * h + h, gait_fs, n_gait)
                     for c in range(N_G):
+                        gv[c] = gv1[c]
+                        gv1[c] = g[n, i, c] + f * (g[n, i + 1, c] - g[n, i, c]) if inside else 0.0
                         gvm[c] = 0.5 * (gv[c] + gv1[c])
-                    if gv[G_CONTACT] == 0.0:
-                        s[5] = s[3]
-                        s[6] = s[4]
+                    if gv[G_CONTACT] == 0.0:  # the foot moves with the plate
+                        s = (s[0], s[1], s[2], s[3], s[4], s[3], s[4])
                     elif not flat:
                         th0 = s[3]
                     flat = gv[G_CONTACT] > 0.0
+                g0, gm, g1 = _row8(gv), _row8(gvm), _row8(gv1)
                 fric = pc[T_COUL] * math.tanh(s[2] / pc[W_EPS])
                 cth = math.cos(s[3])
                 sth = math.sin(s[3])
-                ta, lx, lz = _rhs(s, tau_cmd, gv, pc, fp[n], shell, th0, fric, cth, sth, k1)
-                if q == 0 and j % plate_every == 0:
+                k1, ta, lx, lz = _rhs(s, tau_cmd, g0, pc, fpn, shell, th0, fric, cth, sth)
+                if q == 0 and plate_phase == 0:
                     if flags[FL_PLATE] == 1:
-                        _plate_wrench(
-                            s, k1, ta, lx, lz, gv, pc, fp[n], flags[FL_INERTIA], cth, sth, w
+                        load = _plate_wrench(
+                            s[4], k1[4], ta, lx, lz, g0, pc, fpn, flags[FL_INERTIA], cth, sth
                         )
                         for c in range(N_WRENCH):
-                            x = w[c]
-                            if flags[FL_RESON] == 1:
-                                x = _biquad(x, sos_v if c >= 2 and c <= 4 else sos_h, zr, c)
-                            if flags[FL_AA] == 1:
-                                x = _biquad(x, sos_aa, za, c)
-                            w[c] = x
-                    if j % rec_every == 0:
+                            y = load[c]
+                            for k in range(plate_sections[c]):
+                                out = plate_sos[c, k, 0] * y + z[c, 2 * k]
+                                z[c, 2 * k] = (
+                                    plate_sos[c, k, 1] * y - plate_sos[c, k, 4] * out
+                                    + z[c, 2 * k + 1]
+                                )  # fmt: skip
+                                z[c, 2 * k + 1] = plate_sos[c, k, 2] * y - plate_sos[c, k, 5] * out
+                                y = out
+                            w[c] = y
+                    if rec_phase == 0:
                         r = j // rec_every
                         mech[n, O_THM, r] = s[1]
                         mech[n, O_THH, r] = s[3]
                         if flat:
-                            mech[n, O_PHI, r] = s[5] - th0 + fp[n, F_MIS] * (s[3] - th0)
+                            mech[n, O_PHI, r] = s[5] - th0 + fpn[F_MIS] * (s[3] - th0)
                         else:
                             mech[n, O_PHI, r] = 0.0
                         mech[n, O_TA, r] = ta
@@ -338,17 +351,11 @@ def run_batch(
                         if flags[FL_PLATE] == 1:
                             for c in range(N_WRENCH):
                                 wrench[n, c, r] = w[c]
-                for c in range(7):
-                    tmp[c] = s[c] + 0.5 * h * k1[c]
-                _rhs(tmp, tau_cmd, gvm, pc, fp[n], shell, th0, fric, cth, sth, k2)
-                for c in range(7):
-                    tmp[c] = s[c] + 0.5 * h * k2[c]
-                _rhs(tmp, tau_cmd, gvm, pc, fp[n], shell, th0, fric, cth, sth, k3)
-                for c in range(7):
-                    tmp[c] = s[c] + h * k3[c]
-                _rhs(tmp, tau_cmd, gv1, pc, fp[n], shell, th0, fric, cth, sth, k4)
-                for c in range(7):
-                    s[c] += h / 6.0 * (k1[c] + 2.0 * k2[c] + 2.0 * k3[c] + k4[c])
+                k2 = _rhs(_axpy(s, hh, k1), tau_cmd, gm, pc, fpn, shell, th0, fric, cth, sth)[0]
+                k3 = _rhs(_axpy(s, hh, k2), tau_cmd, gm, pc, fpn, shell, th0, fric, cth, sth)[0]
+                k4 = _rhs(_axpy(s, h, k3), tau_cmd, g1, pc, fpn, shell, th0, fric, cth, sth)[0]
+                s = _rk4_update(s, h6, k1, k2, k3, k4)
                 if locked:  # the holding brake holds the motor shaft
-                    s[1] = lock_angle
-                    s[2] = 0.0
+                    s = (s[0], lock_angle, 0.0, s[3], s[4], s[5], s[6])
+            plate_phase = 0 if plate_phase == plate_every - 1 else plate_phase + 1
+            rec_phase = 0 if rec_phase == rec_every - 1 else rec_phase + 1

@@ -160,6 +160,11 @@ def dynamic_brake_nms_per_rad(params: PerturberatorParameters) -> float:
     return 2 * m.torque_constant_nm_per_a**2 * n * n / (3 * m.winding_resistance_ohm)
 
 
+# gait channels that load the plate; the others (stiffness, damping, the COP's lateral position)
+# act only through a load or a deflection
+_LOAD_CHANNELS = [K.G_X, K.G_Y, K.G_Z, K.G_TNOM, K.G_CONTACT]
+
+
 def platform_constants(
     params: PerturberatorParameters, *, hinge_height_m: float, quantisation: bool = True
 ) -> NDArray[np.float64]:
@@ -289,6 +294,7 @@ def simulate_platform(
     geometry = params.geometry
     hinge_height = geometry.ankle_height_m - geometry.misalignment_vertical_m
     pc = platform_constants(params, hinge_height_m=hinge_height, quantisation=art.quantisation)
+    constants = tuple(pc.tolist())  # the kernel keeps them in registers
     if load is None:
         g = np.zeros((n_trials, 2, K.N_G))
         fp = np.ones((n_trials, K.N_FP))
@@ -298,17 +304,11 @@ def simulate_platform(
     inj = np.zeros((n_trials, 0)) if injection is None else np.atleast_2d(injection).astype(float)
     if inj.size and inj.shape != ref.shape:
         raise ParameterError(f"injection: expected shape {ref.shape}, got {inj.shape}")
-    fplate = sv.position_loop_rate_hz
-    fpp = params.force_plate
-    sos_v = resonance_sos(fpp.vertical_natural_frequency_hz, fpp.damping_ratio, fplate)
-    sos_h = resonance_sos(fpp.horizontal_natural_frequency_hz, fpp.damping_ratio, fplate)
-    sos_aa = butterworth_sos(params.daq.anti_alias_order, params.daq.anti_alias_hz, fplate)
+    plate_sos, plate_sections = _plate_filters(params, art)
     flags = np.zeros(K.N_FL, dtype=np.int64)
     flags[K.FL_FOOT] = load is not None
     flags[K.FL_PLATE] = plate
     flags[K.FL_INERTIA] = art.plate_inertia
-    flags[K.FL_RESON] = art.resonance
-    flags[K.FL_AA] = art.anti_alias
     flags[K.FL_LOOP] = record_loop
     flags[K.FL_NSUB] = substeps
     flags[K.FL_RESUME] = resume is not None
@@ -325,6 +325,11 @@ def simulate_platform(
     if encoder_fault_s is not None:
         lost = np.isfinite(encoder_fault_s)
         enc_fault[lost, 0] = np.round(encoder_fault_s[lost] * sv.velocity_loop_rate_hz)
+    if resume is None:  # skip what stays exactly at rest
+        due = np.where(enc_fault[:, 0] >= 0, enc_fault[:, 0], n_steps)
+        due = np.minimum(due, np.where(forks >= 0, forks, n_steps))
+        rate = sv.velocity_loop_rate_hz
+        span[:, 0] = _steps_at_rest(ref, inj, g if load is not None else None, gait_fs / rate, due)
     enc_jump = np.full(n_trials, float(encoder_jump_rad))
     fault = np.zeros((n_trials, 2), dtype=np.int64)
     n_rec = -(-2 * n_ticks // rec_every)
@@ -342,8 +347,8 @@ def simulate_platform(
             a[rows] for a in per_trial
         )
         K.run_batch(
-            pc, fp_, g_, float(gait_fs), ref_, inj_, flags, sos_v, sos_h, sos_aa, 2, rec_every,
-            span_, start_, fork_, enc_, jump_, mech_, wr_, loop_, snap_, fault_,
+            constants, fp_, g_, float(gait_fs), ref_, inj_, flags, plate_sos, plate_sections, 2,
+            rec_every, span_, start_, fork_, enc_, jump_, mech_, wr_, loop_, snap_, fault_,
         )  # fmt: skip
 
     n_threads = max(1, min(default_threads() if threads is None else threads, n_trials))
@@ -369,6 +374,67 @@ def simulate_platform(
         fault=fault[:, 0],
         fault_s=np.where(fault[:, 0] > 0, fault[:, 1] / sv.velocity_loop_rate_hz, np.nan),
     )
+
+
+def _steps_at_rest(
+    reference: NDArray[np.float64],
+    injection: NDArray[np.float64],
+    gait: NDArray[np.float64] | None,
+    gait_samples_per_step: float,
+    due: NDArray[np.int64],
+) -> NDArray[np.int64]:
+    """Velocity-loop steps during which each trial stays exactly at rest, from its start.
+
+    The platform starts at rest (every state zero) and stays there, to the last bit, until the
+    position command or the injection leaves zero or a load reaches the plate; ``due`` are
+    steps that must be simulated whatever happens (a fault injection, a snapshot). The kernel
+    starts each trial where this returns (with two steps of margin), so the samples before it
+    are the zeros the simulation would have produced.
+
+    Parameters
+    ----------
+    reference, injection : ndarray, shape (n_trials, n_ticks) (injection may be (n_trials, 0))
+        The kernel's position command and velocity injection, per position-loop tick.
+    gait : ndarray, shape (n_trials, n_gait, N_G), optional
+        The kernel's gait channels (None: an empty plate).
+    gait_samples_per_step : float
+        Gait samples per velocity-loop step.
+    due : ndarray of int, shape (n_trials,)
+        First step that must be simulated regardless.
+    """
+    moving = reference != 0
+    if injection.size:
+        moving |= injection != 0
+    first = np.where(moving.any(axis=1), 2 * moving.argmax(axis=1), 2 * reference.shape[1])
+    if gait is not None:  # gait sample r is interpolated into every step after sample r - 1
+        loaded = (gait[:, :, _LOAD_CHANNELS] != 0).any(axis=2)
+        row = np.where(loaded.any(axis=1), loaded.argmax(axis=1), gait.shape[1])
+        first = np.minimum(first, np.floor((row - 1) / gait_samples_per_step).astype(np.int64))
+    return np.clip(np.minimum(first, due) - 2, 0, None)
+
+
+def _plate_filters(
+    params: PerturberatorParameters, art: Artefacts
+) -> tuple[NDArray[np.float64], NDArray[np.int64]]:
+    """The second-order sections that filter each plate-frame wrench component in the kernel
+    (``(6, n_sections, 6)`` at the position-loop rate) and how many each uses: the plate's
+    structural mode (vertical for Fz, Mx, My; horizontal for Fx, Fy, Mz), then the DAQ's
+    anti-alias filter, as the artefacts switch them on."""
+    fplate = params.servo.position_loop_rate_hz
+    fpp = params.force_plate
+    vertical = resonance_sos(fpp.vertical_natural_frequency_hz, fpp.damping_ratio, fplate)
+    horizontal = resonance_sos(fpp.horizontal_natural_frequency_hz, fpp.damping_ratio, fplate)
+    anti_alias = butterworth_sos(params.daq.anti_alias_order, params.daq.anti_alias_hz, fplate)
+    chains = [
+        ([mode] if art.resonance else []) + ([anti_alias] if art.anti_alias else [])
+        for mode in (horizontal, horizontal, vertical, vertical, vertical, horizontal)
+    ]
+    stacked = [np.concatenate(chain) if chain else np.zeros((0, 6)) for chain in chains]
+    sections = np.array([len(c) for c in stacked], dtype=np.int64)
+    sos = np.zeros((K.N_WRENCH, max(1, int(sections.max())), 6))
+    for c, chain in enumerate(stacked):
+        sos[c, : len(chain)] = chain
+    return sos, sections
 
 
 def default_threads() -> int:
