@@ -127,3 +127,30 @@ def test_a_compliant_shell_shares_the_rotation_with_the_ankle(params):
     hinge, ankle = run.hinge_angle[0, -10], run.ankle_angle[0, -10]
     assert ankle == pytest.approx(hinge * 10000.0 / 11000.0, rel=1e-3)  # springs in series
     assert run.ankle_torque[0, -10] == pytest.approx(1000.0 * ankle, rel=1e-3)
+
+
+def test_the_steps_at_rest_before_a_load_are_skipped_without_changing_a_bit(params):
+    """A trial starts where something first moves it; from step 0 (a resume from the rest
+    state, which skips nothing) every output is the same to the last bit."""
+    from anklelab.sim.drivetrain import _steps_at_rest
+
+    n = 1100
+    load = constant_load(params, n, 30.0)
+    load.channels[:, :, :300] = 0.0  # the foot lands at 0.3 s
+    ticks = n * 8
+    reference = np.zeros((1, ticks))
+    reference[0, 5000:] = 0.01  # and the plate moves at 0.625 s
+    steps_per_sample = 2 * params.servo.position_loop_rate_hz / load.fs
+    start = _steps_at_rest(
+        reference, np.zeros((1, 0)), load.channels.transpose(0, 2, 1), 1 / steps_per_sample,
+        np.array([2 * ticks]),
+    )  # fmt: skip
+    assert 0.29 * 16000 < start[0] < 0.3 * 16000
+    skipped = simulate_platform(params, reference, load=load)
+    everything = simulate_platform(
+        params, reference, load=load, resume=(np.zeros(1, dtype=np.int64), np.zeros((1, K.N_SNAP)))
+    )
+    for name in ("motor_angle", "hinge_angle", "ankle_angle", "ankle_torque", "motor_torque"):
+        assert getattr(skipped, name).tobytes() == getattr(everything, name).tobytes(), name
+    assert skipped.wrench.tobytes() == everything.wrench.tobytes()
+    assert np.abs(skipped.wrench[0, 2, 400:]).max() > 100  # the load reached the plate
