@@ -43,12 +43,15 @@ def force_channels(
     fp = params.force_plate
     channels = sensor_channels(wrench, fp, yaw_rad=fp.yaw_rad)
     n_trials, _, n = channels.shape
-    if art.drift:
+    if art.drift:  # in place: channels is the fresh array sensor_channels returned
         t = np.arange(n) / params.daq.sample_rate_hz
         rate = fp.drift_n_per_s * rng.standard_normal((n_trials, len(CHANNELS), 1))
-        channels = channels + rate * t
+        channels += rate * t
     if art.noise:
-        channels = channels + fp.noise_n * rng.standard_normal(channels.shape)
+        noise = rng.standard_normal(channels.shape)
+        noise *= fp.noise_n
+        channels += noise
+        del noise
     if art.quantisation:
         full = np.where(_VERTICAL, fp.range_vertical_n, fp.range_horizontal_n)[:, None]
         channels = daq_quantize(channels, full, params.daq.bits)
