@@ -134,12 +134,17 @@ def _envelope(s: NDArray, trials: GaitTrials, params: GaitParameters) -> NDArray
     return np.where(on, 0.25 * (1 - np.cos(np.pi * rise)) * (1 - np.cos(np.pi * fall)), 0.0)
 
 
-def _vertical(s: NDArray, trials: GaitTrials, params: GaitParameters) -> NDArray:
+def _vertical(
+    s: NDArray, trials: GaitTrials, params: GaitParameters, envelope: NDArray | None = None
+) -> NDArray:
+    """Vertical GRF at times ``s`` after contact (``envelope``: :func:`_envelope` at ``s``, if
+    the caller has it)."""
     u = s / trials.stance_s[:, None]
     humps = np.exp(-(((u - 0.25) / 0.12) ** 2)) + np.exp(-(((u - 0.75) / 0.12) ** 2))
     weight = params.body_mass_kg * GRAVITY * trials.amplitude[:, None]
     shape = params.vertical_base_bw + params.vertical_hump_bw * humps
-    return weight * _envelope(s, trials, params) * shape
+    env = _envelope(s, trials, params) if envelope is None else envelope
+    return weight * env * shape
 
 
 def vertical_force(
@@ -163,7 +168,7 @@ def stance_signals(
     return StanceSignals(
         grf_x=-weight * env * fore_aft * np.sin(2 * np.pi * u),
         grf_y=-weight * env * params.lateral_bw * np.sin(np.pi * np.clip(u, 0, 1)),
-        grf_z=_vertical(s, trials, params),
+        grf_z=_vertical(s, trials, params, env),
         progression=np.where(on, progression, 0.0),
         fraction=np.where(on, u, np.nan),
     )
