@@ -131,7 +131,8 @@ def test_a_compliant_shell_shares_the_rotation_with_the_ankle(params):
 
 def test_the_steps_at_rest_before_a_load_are_skipped_without_changing_a_bit(params):
     """A trial starts where something first moves it; from step 0 (a resume from the rest
-    state, which skips nothing) every output is the same to the last bit."""
+    state, which skips nothing) every output is the same to the last bit (with the plate's
+    filters on; with both off, Fx and Fy at rest would read -0.0 instead of +0.0)."""
     from anklelab.sim.drivetrain import _steps_at_rest
 
     n = 1100
@@ -146,6 +147,12 @@ def test_the_steps_at_rest_before_a_load_are_skipped_without_changing_a_bit(para
         np.array([2 * ticks]),
     )  # fmt: skip
     assert 0.29 * 16000 < start[0] < 0.3 * 16000
+    undefined = load.channels.transpose(0, 2, 1).copy()
+    undefined[0, 10, K.G_K] = np.nan  # a stiffness that is not a number moves nothing only if
+    at = _steps_at_rest(  # it is simulated (NaN times zero is NaN): no skip past it
+        reference, np.zeros((1, 0)), undefined, 1 / steps_per_sample, np.array([2 * ticks])
+    )
+    assert at[0] < 10 * steps_per_sample
     skipped = simulate_platform(params, reference, load=load)
     everything = simulate_platform(
         params, reference, load=load, resume=(np.zeros(1, dtype=np.int64), np.zeros((1, K.N_SNAP)))

@@ -94,11 +94,11 @@ def _fast(data: bytes, names: list[str], nullable: tuple[str, ...]) -> NDArray[n
     # where one wrapping the Python bytes would take the GIL from that thread, and abort the
     # process if that happens while the interpreter shuts down (terminate called without an
     # active exception, seen about once in 150 runs that stop on an error).
-    sink = pa.BufferOutputStream()
-    sink.write(data)
+    text = pa.allocate_buffer(len(data))
+    pa.FixedSizeBufferWriter(text).write(data)
     try:
         with pacsv.open_csv(
-            pa.BufferReader(sink.getvalue()),
+            pa.BufferReader(text),
             read_options=pacsv.ReadOptions(skip_rows=1, column_names=names, use_threads=False),
             parse_options=pacsv.ParseOptions(newlines_in_values=False),
             convert_options=pacsv.ConvertOptions(

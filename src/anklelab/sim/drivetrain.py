@@ -386,10 +386,11 @@ def _steps_at_rest(
     """Velocity-loop steps during which each trial stays exactly at rest, from its start.
 
     The platform starts at rest (every state zero) and stays there, to the last bit, until the
-    position command or the injection leaves zero or a load reaches the plate; ``due`` are
-    steps that must be simulated whatever happens (a fault injection, a snapshot). The kernel
-    starts each trial where this returns (with two steps of margin), so the samples before it
-    are the zeros the simulation would have produced.
+    position command or the injection leaves zero, a load reaches the plate or a gait channel
+    is not finite; ``due`` are steps that must be simulated whatever happens (a fault
+    injection, a snapshot). The kernel starts each trial where this returns (with two steps of
+    margin), so the samples before it hold the zeros the simulation would have produced (as
+    +0.0: with both of the plate's filters off, the kernel writes Fx and Fy at rest as -0.0).
 
     Parameters
     ----------
@@ -407,8 +408,8 @@ def _steps_at_rest(
         moving |= injection != 0
     first = np.where(moving.any(axis=1), 2 * moving.argmax(axis=1), 2 * reference.shape[1])
     if gait is not None:  # gait sample r is interpolated into every step after sample r - 1
-        loaded = (gait[:, :, _LOAD_CHANNELS] != 0).any(axis=2)
-        row = np.where(loaded.any(axis=1), loaded.argmax(axis=1), gait.shape[1])
+        active = (gait[:, :, _LOAD_CHANNELS] != 0).any(axis=2) | ~np.isfinite(gait).all(axis=2)
+        row = np.where(active.any(axis=1), active.argmax(axis=1), gait.shape[1])
         first = np.minimum(first, np.floor((row - 1) / gait_samples_per_step).astype(np.int64))
     return np.clip(np.minimum(first, due) - 2, 0, None)
 

@@ -88,10 +88,12 @@ def daq_quantize(
     --------
     >>> daq_quantize(np.array([0.3, 2.0]), full_scale=1.0, bits=2)
     array([0.5, 0.5])
+    >>> float(daq_quantize(-0.3, full_scale=1.0, bits=2))
+    -0.5
     """
     step = 2 * full_scale / 2**bits
-    codes = values / step  # one array, worked in place (a session's channels are ~100 MB)
+    codes = np.asarray(values / step)  # one array, worked in place (a session's is ~100 MB)
     np.round(codes, out=codes)
     np.clip(codes, -(2 ** (bits - 1)), 2 ** (bits - 1) - 1, out=codes)
     codes *= step
-    return codes
+    return codes if codes.ndim else codes[()]
