@@ -12,6 +12,9 @@ from anklelab.iir import butterworth_sos, edge_padding, sosfiltfilt
 
 __all__ = ["lowpass", "lowpass_min_samples"]
 
+_design = lru_cache(maxsize=32)(butterworth_sos)
+"""The Butterworth design, once per (order, cut-off, rate): an analysis filters many times."""
+
 
 def _check(fs: float, cutoff_hz: float, order: int) -> NDArray[np.float64]:
     if not 0 < cutoff_hz < fs / 2:
@@ -21,9 +24,6 @@ def _check(fs: float, cutoff_hz: float, order: int) -> NDArray[np.float64]:
     if int(order) != order or order < 1:
         raise ParameterError(f"order: expected a positive integer, got {order!r}")
     return _design(int(order), float(cutoff_hz), float(fs))
-
-
-_design = lru_cache(maxsize=32)(butterworth_sos)
 
 
 def lowpass_min_samples(fs: float, cutoff_hz: float = 20.0, *, order: int = 4) -> int:
