@@ -1,9 +1,10 @@
 """Legibility checks of a drawn matplotlib figure, as a reader would judge it.
 
 :func:`problems` lists, in words, what would make a figure hard to read: texts that overlap
-(titles, axis and tick labels, legends), a legend that covers a panel, an axis label without a
-unit, a code name (``cop_m``, ``snake_case``) in any text. The report tests run it on every
-walking figure; the browser tests check how the page lays the figures out.
+(titles, axis and tick labels, legends), a text cut by the figure's edge, a legend that covers
+a panel, a panel whose axis has no scale (no tick labels of its own or of a panel sharing it),
+an axis label without a unit, a code name (``cop_m``, ``snake_case``) in any text. The report
+tests run it on every walking figure; the browser tests check how the page lays the figures out.
 """
 
 from __future__ import annotations
@@ -36,6 +37,16 @@ def _texts(fig: Any, renderer: Any) -> list[tuple[str, Any]]:
     ]
 
 
+def _has_scale(ax: Any, name: str) -> bool:
+    """Whether ``ax`` shows tick labels on its ``name`` ("x" or "y") axis."""
+    axis = ax.xaxis if name == "x" else ax.yaxis
+    return any(
+        (tick.label1.get_visible() and tick.label1.get_text())
+        or (tick.label2.get_visible() and tick.label2.get_text())
+        for tick in axis._update_ticks()
+    )
+
+
 def problems(fig: Any) -> list[str]:
     """What makes ``fig`` hard to read (empty when nothing does)."""
     from matplotlib.backends.backend_agg import FigureCanvasAgg
@@ -50,7 +61,25 @@ def problems(fig: Any) -> list[str]:
             inter = box_a.intersection(box_a, box_b)
             if inter is not None and inter.width > 1 and inter.height > 1:
                 found.append(f"texts overlap: {a!r} and {b!r}")
+    edge = fig.bbox
+    for text, box in texts:
+        if (
+            box.x0 < edge.x0 - 1
+            or box.y0 < edge.y0 - 1
+            or box.x1 > edge.x1 + 1
+            or box.y1 > edge.y1 + 1
+        ):
+            found.append(f"a text is cut by the figure's edge: {text!r}")
     panels = [ax for ax in fig.axes if ax.get_visible()]
+    for ax in panels:
+        for name, shared in (("x", ax.get_shared_x_axes()), ("y", ax.get_shared_y_axes())):
+            scaled = [
+                other
+                for other in shared.get_siblings(ax)
+                if other in panels and _has_scale(other, name)
+            ]
+            if not scaled:
+                found.append(f"the panel {ax.get_title()!r} has no {name} scale")
     for legend in fig.legends + [ax.get_legend() for ax in panels if ax.get_legend()]:
         box = legend.get_window_extent(renderer)
         for ax in panels:

@@ -38,6 +38,20 @@ def test_the_checker_finds_what_a_reader_would():
     fig.subplots().plot([0, 1])
     fig.legend(["line"], loc="center")
     assert "a legend covers the panel ''" in problems(fig)
+    fig = Figure(figsize=(4, 3))  # no layout: the default margins cut a long y label
+    ax = fig.subplots()
+    ax.plot([0, 1e6])
+    ax.set_ylabel("a force that needs a long label (N)", fontsize=30)
+    assert "a text is cut by the figure's edge: 'a force that needs a long label (N)'" in problems(
+        fig
+    )
+    fig = Figure(figsize=(6, 3), layout="constrained")  # a right panel of another quantity
+    left, right = fig.subplots(1, 2, sharex=True)
+    left.plot([0, 1], [0, 1])
+    right.plot([0, 1], [0, 100])
+    right.set_title("torque")
+    right.label_outer()  # drops the right panel's own y scale
+    assert problems(fig) == ["the panel 'torque' has no y scale"]
 
 
 def test_every_walking_figure_is_legible(results):

@@ -22,6 +22,7 @@ import numpy as np
 
 from anklelab.ident.bench import interpolate_stiffness
 from anklelab.pipelines.walking.results import QUANTITIES as _ALL
+from anklelab.report._panels import SMALL_LINE_IN, Margins, panel_grid, set_top_margin
 from anklelab.report.paper_values import PAPER_000
 
 if TYPE_CHECKING:
@@ -198,10 +199,8 @@ def impedance_figure(
     matplotlib.figure.Figure
         Three panels in a row, one legend below them.
     """
-    from matplotlib.figure import Figure
-
-    fig = Figure(figsize=(11.0, 3.5), layout="constrained")
-    axes = fig.subplots(1, 3)
+    fig, axes = panel_grid(1, 3, 11.0, 3.5, Margins(bottom=0.6))  # tick labels, then supxlabel
+    axes = axes[0]
     handles: dict[str, Any] = {}
     every = [tp for d in DIRECTIONS for tp in _points(results, d)]
     kind = interval_kind(every) if every else CI95
@@ -261,20 +260,25 @@ def impedance_figure(
         else "lever arm: distance from the ankle centre to the centre of pressure (cm)"
     )
     for ax, q in zip(axes, IMPEDANCE, strict=True):
-        ax.set_title(
-            q.name.capitalize() + (" (paper 000: not reported)" if q.name == "damping" else "")
+        ax.set_title(  # above the "?" a top interval carries
+            q.name.capitalize() + (" (paper 000: not reported)" if q.name == "damping" else ""),
+            pad=12,
         )
         ax.set_ylabel(f"{q.name} ({q.unit})")
         ax.grid(True, color="0.92", lw=0.6)
         if x == "timing" and every:
             ax.set_xticks(sorted({tp.delay_ms for tp in every}))
-    fig.supxlabel(xlabel, fontsize="medium")
+    fig.supxlabel(xlabel, fontsize="medium", y=0.02)
     if handles:
+        columns = min(3, len(handles))
+        rows = 1 + math.ceil(len(handles) / columns)  # the title, then the entries
+        set_top_margin(axes, Margins.top + rows * SMALL_LINE_IN + 0.25)  # titles padded
         fig.legend(
             list(handles.values()),
             list(handles),
-            loc="outside upper center",
-            ncols=min(3, len(handles)),
+            loc="upper center",
+            bbox_to_anchor=(0.5, 1.0),
+            ncols=columns,
             fontsize="small",
             frameon=False,
             title=f"error bars: {kind}",

@@ -17,6 +17,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from anklelab._atomic import write_bytes_atomic
+from anklelab.report._panels import LINE_IN, SMALL_LINE_IN, Margins, panel_grid
 from anklelab.report.figures_impedance import impedance_figure
 from anklelab.report.render import FigureRenderer, PendingFigures
 
@@ -48,6 +49,10 @@ _STYLES = ({"lw": 4.0, "alpha": 0.45, "ls": "-"}, {"lw": 1.3, "alpha": 1.0, "ls"
 _PAIRS = {"fx12": 0, "fx34": 1, "fy14": 0, "fy23": 1, "fz1": 0, "fz4": 1, "fz2": 0, "fz3": 1}
 _PAIR_COLORS = {"fx12": "tab:blue", "fx34": "tab:blue", "fy14": "tab:gray", "fy23": "tab:gray"}
 _PAIR_COLORS |= {"fz1": "tab:red", "fz4": "tab:red", "fz2": "tab:green", "fz3": "tab:green"}
+_LEGEND_IN = LINE_IN + 0.15
+"""Room for a one-row figure legend below the panels, inches."""
+_PANEL_LEGEND_ROWS = 2
+"""Rows of the legend below each filter panel (up to five entries, three columns)."""
 # the stance channels the stance figure draws: name, axis label, scale
 _STANCE_DRAWN = (
     ("angle", "ankle angle (deg)", np.degrees(1.0)),
@@ -55,18 +60,13 @@ _STANCE_DRAWN = (
 )
 
 
-def _figure(rows: int, cols: int, width: float, height: float, **kw: Any) -> tuple[Figure, Any]:
-    """A constrained-layout figure ``width`` × ``height`` inches overall (100 dpi in the report)."""
-    from matplotlib.figure import Figure
-
-    fig = Figure(figsize=(width, height), layout="constrained")
-    return fig, fig.subplots(rows, cols, squeeze=False, **kw)
-
-
 def _legend_below(fig: Figure, ax: Any, ncols: int) -> None:
-    """One legend for the figure, outside every panel (it never covers data)."""
+    """One legend for the figure, below every panel (it never covers data): its one row sits in
+    the ``_LEGEND_IN`` the figure's bottom margin keeps for it."""
     handles, labels = ax.get_legend_handles_labels()
-    fig.legend(handles, labels, loc="outside lower center", ncols=ncols, frameon=False)
+    fig.legend(
+        handles, labels, loc="lower center", bbox_to_anchor=(0.5, 0.0), ncols=ncols, frameon=False
+    )
 
 
 def filters_figure(filters: PlatformFilters) -> Figure:
@@ -77,7 +77,13 @@ def filters_figure(filters: PlatformFilters) -> Figure:
     for the part of the response the filter's length cuts off (see the report guide), not for
     the decaying response itself.
     """
-    fig, axes = _figure(len(filters.inputs), 2, 11.0, 3.1 * len(filters.inputs))
+    legend_in = _PANEL_LEGEND_ROWS * SMALL_LINE_IN + LINE_IN  # x label, then the legend
+    below = [legend_in if n_lags > 1 else 0.0 for n_lags in filters.lags]  # a panel's legend
+    margins = Margins(
+        bottom=Margins.bottom + below[-1],
+        between_rows=0.6 + max((b + 0.25 if b else 0.0 for b in below[:-1]), default=0.0),
+    )
+    fig, axes = panel_grid(len(filters.inputs), 2, 11.0, 3.1 * len(filters.inputs), margins)
     for row, (name, n_lags) in enumerate(zip(filters.inputs, filters.lags, strict=True)):
         for col, vertical in enumerate((False, True)):
             ax = axes[row, col]
@@ -100,11 +106,12 @@ def filters_figure(filters: PlatformFilters) -> Figure:
             ax.plot([], [], "o", mfc="none", color="0.3", label="last lag: the cut-off tail")
             ax.set_xlabel("lag (ms)")
             ax.set_ylabel(f"impulse response ({_UNITS[name]}/s)")
-            ax.legend(
+            panel_in = ax.get_position().height * fig.get_figheight()
+            ax.legend(  # under the panel's x label
                 fontsize="small",
                 ncols=3,
                 loc="upper center",
-                bbox_to_anchor=(0.5, -0.22),
+                bbox_to_anchor=(0.5, -(Margins.bottom - 0.05) / panel_in),
                 frameon=False,
             )
     return fig
@@ -123,9 +130,9 @@ def stance_figure(results: WalkingResults) -> Figure:
     Fig. 5): one row per direction, every timing point in its own colour over the unperturbed
     mean ± sd, the dotted lines at the mean detected onsets."""
     directions = [d for d in _COLORS if any(tp.direction == d for tp in results.timing_points)]
-    fig, axes = _figure(
-        max(1, len(directions)), 2, 11.0, 0.6 + 2.7 * max(1, len(directions)), sharex=True
-    )
+    rows = max(1, len(directions))
+    margins = Margins(bottom=Margins.bottom + _LEGEND_IN, between_rows=0.45)
+    fig, axes = panel_grid(rows, 2, 11.0, 0.6 + 2.7 * rows, margins, sharex=True)
     stance = results.stance
     t_ms = stance.times * 1000.0
     none = stance["none"]
@@ -159,8 +166,8 @@ def stance_figure(results: WalkingResults) -> Figure:
                 ax.axvline(np.mean(tp.onset_ms), color=color, ls=":", lw=1)
             ax.set_title(f"{_DIRECTION_WORDS[direction]}: {label.split(' (')[0]}")
             ax.set_ylabel(label)
-            ax.set_xlabel("time after heel contact (ms)")
-            ax.label_outer(remove_inner_ticks=False)
+            if row == len(directions) - 1:  # the panels above share its time axis
+                ax.set_xlabel("time after heel contact (ms)")
     if directions:
         _legend_below(fig, axes[0, 0], ncols=len(delays) + 1)
     return fig
@@ -172,13 +179,12 @@ def model_fit_figure(results: WalkingResults) -> Figure:
     points = results.timing_points
     directions = [d for d in _COLORS if any(tp.direction == d for tp in points)]
     delays = sorted({tp.delay_ms for tp in points})
-    fig, axes = _figure(
-        max(1, len(directions)),
-        max(1, len(delays)),
-        11.0,
-        0.7 + 2.5 * max(1, len(directions)),
-        sharex=True,
-        sharey="row",
+    rows = max(1, len(directions))
+    margins = Margins(  # two-line titles; inner panels carry no y tick labels
+        top=0.55, bottom=Margins.bottom + _LEGEND_IN, between_rows=0.65, between_columns=0.2
+    )
+    fig, axes = panel_grid(
+        rows, max(1, len(delays)), 11.0, 0.7 + 2.5 * rows, margins, sharex=True, sharey="row"
     )
     for ax in axes.flat:
         ax.set_visible(False)

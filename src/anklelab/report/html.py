@@ -92,8 +92,9 @@ class Section:
 def figure_png(fig: Any, *, dpi: int = 100) -> bytes:
     """Render a matplotlib figure to PNG bytes (at ``dpi``, which the figure keeps).
 
-    The figure lays itself out (``layout="constrained"``): it is saved at its own size, so a
-    figure 11 inches wide fills the report's 1100-pixel column at 100 dpi without rescaling.
+    The figure is laid out already (by its layout engine, or by fixed margins,
+    :mod:`anklelab.report._panels`): it is saved at its own size, so a figure 11 inches wide
+    fills the report's 1100-pixel column at 100 dpi without rescaling.
     It is drawn once, by its Agg canvas: ``savefig`` would draw it twice (once to run the
     layout), for the same bytes, 10-25 % slower.
     """
