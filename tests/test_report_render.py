@@ -1,6 +1,8 @@
 """Figures rendered in worker processes are the figures drawn in the calling process."""
 
+import atexit
 import hashlib
+import multiprocessing
 import os
 
 import pytest
@@ -30,6 +32,10 @@ def dies_in_workers(data: tuple[float, int], name: str) -> Figure:
 
 NAMES = ["one", "two", "three"]
 
+TEARDOWN_MARK = os.environ.get("ANKLELAB_TEST_TEARDOWN_MARK")
+if TEARDOWN_MARK and multiprocessing.parent_process() is not None:  # in a worker: it imports us
+    atexit.register(lambda: open(TEARDOWN_MARK, "a").write(f"{os.getpid()}\n"))
+
 
 def test_workers_render_the_same_pngs_as_the_calling_process():
     serial = FigureRenderer(processes=1)
@@ -41,6 +47,19 @@ def test_workers_render_the_same_pngs_as_the_calling_process():
     assert rendered == expected
     assert all(png.startswith(b"\x89PNG") for png in rendered.values())
     assert len({hashlib.sha256(png).digest() for png in rendered.values()}) == len(NAMES)
+
+
+def test_the_workers_end_without_tearing_their_interpreter_down(tmp_path, monkeypatch):
+    """A worker's exit handlers (here one the worker registered on import) never run: the
+    interpreter's teardown with matplotlib loaded took 0.3 s that the command waited for."""
+    mark = tmp_path / "teardown"
+    monkeypatch.setenv("ANKLELAB_TEST_TEARDOWN_MARK", str(mark))
+    renderer = FigureRenderer([__name__], processes=2)
+    workers = list(renderer._pool._processes.values())
+    with renderer:
+        assert list(renderer.render(draw, 2.0, NAMES)) == NAMES
+    assert [worker.exitcode for worker in workers] == [0, 0]
+    assert not mark.exists(), mark.read_text()
 
 
 def test_a_figure_that_fails_to_draw_raises_in_the_caller_and_the_workers_stop():
