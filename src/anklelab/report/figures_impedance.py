@@ -22,7 +22,7 @@ import numpy as np
 
 from anklelab.ident.bench import interpolate_stiffness
 from anklelab.pipelines.walking.results import QUANTITIES as _ALL
-from anklelab.report._panels import SMALL_LINE_IN, Margins, panel_grid, set_top_margin
+from anklelab.report._panels import SMALL_LINE_IN, Margins, panel_grid, set_title, set_top_margin
 from anklelab.report.paper_values import PAPER_000
 
 if TYPE_CHECKING:
@@ -260,7 +260,8 @@ def impedance_figure(
         else "lever arm: distance from the ankle centre to the centre of pressure (cm)"
     )
     for ax, q in zip(axes, IMPEDANCE, strict=True):
-        ax.set_title(  # above the "?" a top interval carries
+        set_title(
+            ax,  # above the "?" a top interval carries
             q.name.capitalize() + (" (paper 000: not reported)" if q.name == "damping" else ""),
             pad=12,
         )

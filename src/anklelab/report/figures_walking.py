@@ -17,7 +17,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from anklelab._atomic import write_bytes_atomic
-from anklelab.report._panels import LINE_IN, SMALL_LINE_IN, Margins, panel_grid
+from anklelab.report._panels import LINE_IN, SMALL_LINE_IN, Margins, panel_grid, set_title
 from anklelab.report.figures_impedance import impedance_figure
 from anklelab.report.render import FigureRenderer, PendingFigures
 
@@ -88,7 +88,7 @@ def filters_figure(filters: PlatformFilters) -> Figure:
         for col, vertical in enumerate((False, True)):
             ax = axes[row, col]
             picked = [c for c, ch in enumerate(filters.channels) if ch.startswith("fz") == vertical]
-            ax.set_title(f"{name} → {'vertical' if vertical else 'horizontal'} force channels")
+            set_title(ax, f"{name} → {'vertical' if vertical else 'horizontal'} force channels")
             ax.axhline(0.0, color="0.7", lw=0.5)
             if n_lags == 1:
                 labels = [filters.channels[c] for c in picked]
@@ -164,7 +164,7 @@ def stance_figure(results: WalkingResults) -> Figure:
                     scale,
                 )
                 ax.axvline(np.mean(tp.onset_ms), color=color, ls=":", lw=1)
-            ax.set_title(f"{_DIRECTION_WORDS[direction]}: {label.split(' (')[0]}")
+            set_title(ax, f"{_DIRECTION_WORDS[direction]}: {label.split(' (')[0]}")
             ax.set_ylabel(label)
             if row == len(directions) - 1:  # the panels above share its time axis
                 ax.set_xlabel("time after heel contact (ms)")
@@ -194,7 +194,8 @@ def model_fit_figure(results: WalkingResults) -> Figure:
         t_ms = tp.time_s * 1000.0
         _band(ax, t_ms, tp.torque, _COLORS[tp.direction], "measured (mean ± sd)")
         ax.plot(t_ms, tp.model_torque.mean(axis=0), "k--", lw=1.2, label="model I θ'' + b θ' + k θ")
-        ax.set_title(
+        set_title(
+            ax,
             f"{_DIRECTION_WORDS[tp.direction]}, {tp.delay_ms:g} ms\n"
             f"k = {tp.stiffness.mean:.0f} N·m/rad, VAF {tp.vaf.mean:.1f} %",
             fontsize="medium",
