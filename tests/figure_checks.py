@@ -24,6 +24,7 @@ def _texts(fig: Any, renderer: Any) -> list[tuple[str, Any]]:
         texts += [legend.get_title(), *legend.get_texts()]
     for ax in (ax for ax in fig.axes if ax.get_visible()):
         texts += [ax.title, ax._left_title, ax._right_title, ax.xaxis.label, ax.yaxis.label]
+        texts += [ax.xaxis.offsetText, ax.yaxis.offsetText]  # "1e-5", "+1.3e3"
         texts += [*ax.texts]
         if ax.get_legend():
             texts += [ax.get_legend().get_title(), *ax.get_legend().get_texts()]
@@ -35,6 +36,12 @@ def _texts(fig: Any, renderer: Any) -> list[tuple[str, Any]]:
         for t in dict.fromkeys(texts)
         if t.get_visible() and str(t.get_text()).strip()
     ]
+
+
+def _span(ax: Any, name: str) -> Any:
+    """The grid columns (``name`` "x") or rows ("y") that ``ax`` spans (``None`` off a grid)."""
+    spec = ax.get_subplotspec()
+    return None if spec is None else (spec.colspan if name == "x" else spec.rowspan)
 
 
 def _has_scale(ax: Any, name: str) -> bool:
@@ -73,10 +80,11 @@ def problems(fig: Any) -> list[str]:
     panels = [ax for ax in fig.axes if ax.get_visible()]
     for ax in panels:
         for name, shared in (("x", ax.get_shared_x_axes()), ("y", ax.get_shared_y_axes())):
-            scaled = [
+            scaled = [  # a panel in the same column (x) or row (y) that shows the scale
                 other
                 for other in shared.get_siblings(ax)
-                if other in panels and _has_scale(other, name)
+                if other in panels and _span(other, name) == _span(ax, name)
+                if _has_scale(other, name)
             ]
             if not scaled:
                 found.append(f"the panel {ax.get_title()!r} has no {name} scale")

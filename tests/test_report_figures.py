@@ -69,6 +69,47 @@ def test_every_walking_figure_is_legible(results):
         assert width <= 1100 and height <= 700, (name, width, height)
 
 
+def _with_delays(results, delays):
+    """``results`` with every direction's first timing point copied to each of ``delays``
+    (its stance trials relabelled to match)."""
+    from dataclasses import replace
+
+    from anklelab.signals import Trials
+
+    stance = results.stance
+    points, data = [], [stance["none"].data]
+    conditions = [["none"] * len(stance["none"])]
+    for first in {tp.direction: tp for tp in reversed(results.timing_points)}.values():
+        for delay in delays:
+            points.append(replace(first, delay_ms=float(delay)))
+            data.append(stance[first.key].data)
+            conditions.append([points[-1].key] * len(stance[first.key]))
+    metadata = {"condition": np.concatenate(conditions)}
+    trials = Trials(np.concatenate(data), stance.fs, stance.ch_names, metadata, tmin=stance.tmin)
+    return replace(results, timing_points=points, stance=trials)
+
+
+@pytest.mark.parametrize("variant", ["one condition missing", "six timing points", "one direction"])
+def test_the_walking_figures_stay_legible_with_other_conditions(results, variant):
+    """A condition that lost every trial leaves a gap in the grids, without taking a row's or a
+    column's scale with it; more timing points wrap the legend and the titles."""
+    from dataclasses import replace
+
+    points = results.timing_points
+    if variant == "six timing points":
+        results = _with_delays(results, [100, 190, 280, 370, 460, 550])
+    elif variant == "one direction":
+        results = replace(results, timing_points=[tp for tp in points if tp.direction == "plantar"])
+    for missing in range(len(points)) if variant == "one condition missing" else [None]:
+        shown = results
+        if missing is not None:
+            shown = replace(results, timing_points=points[:missing] + points[missing + 1 :])
+        for name in ("stance_profiles", "model_fit"):
+            fig = figures_walking.walking_figure(shown, name)
+            assert problems(fig) == [], (variant, missing, name)
+            assert fig.get_size_inches()[1] * 100 <= 700
+
+
 def test_stance_profiles_show_angles_in_degrees(results):
     fig = figures_walking.stance_figure(results)
     angle = fig.axes[0]

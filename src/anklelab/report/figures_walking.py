@@ -10,6 +10,7 @@ matplotlib. :func:`save_walking_figures` writes them all as PNG files, atomicall
 
 from __future__ import annotations
 
+import math
 from dataclasses import replace
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -50,7 +51,11 @@ _PAIRS = {"fx12": 0, "fx34": 1, "fy14": 0, "fy23": 1, "fz1": 0, "fz4": 1, "fz2":
 _PAIR_COLORS = {"fx12": "tab:blue", "fx34": "tab:blue", "fy14": "tab:gray", "fy23": "tab:gray"}
 _PAIR_COLORS |= {"fz1": "tab:red", "fz4": "tab:red", "fz2": "tab:green", "fz3": "tab:green"}
 _LEGEND_IN = LINE_IN + 0.15
-"""Room for a one-row figure legend below the panels, inches."""
+"""Room for one row of a figure legend below the panels, inches."""
+_LEGEND_COLUMNS = 5
+"""Entries in a row of a figure legend: five entries such as "perturbed at 475 ms" fill 11 in."""
+_TITLE_COLUMNS = 4
+"""Beyond this many timing points a model-fit panel's title takes three lines, not two."""
 _PANEL_LEGEND_ROWS = 2
 """Rows of the legend below each filter panel (up to five entries, three columns)."""
 # the stance channels the stance figure draws: name, axis label, scale
@@ -60,12 +65,22 @@ _STANCE_DRAWN = (
 )
 
 
-def _legend_below(fig: Figure, ax: Any, ncols: int) -> None:
-    """One legend for the figure, below every panel (it never covers data): its one row sits in
-    the ``_LEGEND_IN`` the figure's bottom margin keeps for it."""
+def _legend_rows(entries: int) -> int:
+    """Rows of a figure legend of ``entries`` below the panels (:data:`_LEGEND_COLUMNS` a row)."""
+    return max(1, math.ceil(entries / _LEGEND_COLUMNS))
+
+
+def _legend_below(fig: Figure, ax: Any) -> None:
+    """One legend for the figure, below every panel (it never covers data), in the
+    ``_legend_rows`` rows of :data:`_LEGEND_IN` the figure's bottom margin keeps for it."""
     handles, labels = ax.get_legend_handles_labels()
     fig.legend(
-        handles, labels, loc="lower center", bbox_to_anchor=(0.5, 0.0), ncols=ncols, frameon=False
+        handles,
+        labels,
+        loc="lower center",
+        bbox_to_anchor=(0.5, 0.0),
+        ncols=min(len(labels), _LEGEND_COLUMNS),
+        frameon=False,
     )
 
 
@@ -130,13 +145,15 @@ def stance_figure(results: WalkingResults) -> Figure:
     Fig. 5): one row per direction, every timing point in its own colour over the unperturbed
     mean ± sd, the dotted lines at the mean detected onsets."""
     directions = [d for d in _COLORS if any(tp.direction == d for tp in results.timing_points)]
-    rows = max(1, len(directions))
-    margins = Margins(bottom=Margins.bottom + _LEGEND_IN, between_rows=0.45)
-    fig, axes = panel_grid(rows, 2, 11.0, 0.6 + 2.7 * rows, margins, sharex=True)
+    delays = sorted({tp.delay_ms for tp in results.timing_points})
+    rows, legend = max(1, len(directions)), _legend_rows(len(delays) + 1)
+    margins = Margins(bottom=Margins.bottom + legend * _LEGEND_IN, between_rows=0.45)
+    fig, axes = panel_grid(
+        rows, 2, 11.0, 0.6 + 2.7 * rows + (legend - 1) * _LEGEND_IN, margins, sharex=True
+    )
     stance = results.stance
     t_ms = stance.times * 1000.0
     none = stance["none"]
-    delays = sorted({tp.delay_ms for tp in results.timing_points})
     colors = dict(zip(delays, _TIMING_COLORS * (1 + len(delays) // 6), strict=False))
     for row, direction in enumerate(directions):
         for col, (channel, label, scale) in enumerate(_STANCE_DRAWN):
@@ -169,7 +186,7 @@ def stance_figure(results: WalkingResults) -> Figure:
             if row == len(directions) - 1:  # the panels above share its time axis
                 ax.set_xlabel("time after heel contact (ms)")
     if directions:
-        _legend_below(fig, axes[0, 0], ncols=len(delays) + 1)
+        _legend_below(fig, axes[0, 0])
     return fig
 
 
@@ -179,13 +196,17 @@ def model_fit_figure(results: WalkingResults) -> Figure:
     points = results.timing_points
     directions = [d for d in _COLORS if any(tp.direction == d for tp in points)]
     delays = sorted({tp.delay_ms for tp in points})
-    rows = max(1, len(directions))
-    margins = Margins(  # two-line titles; inner panels carry no y tick labels
-        top=0.55, bottom=Margins.bottom + _LEGEND_IN, between_rows=0.65, between_columns=0.2
+    rows, columns = max(1, len(directions)), max(1, len(delays))
+    title_lines = 3 if columns > _TITLE_COLUMNS else 2  # narrow panels: one line more
+    title_in = title_lines * LINE_IN + 0.15
+    margins = Margins(  # inner panels carry no y tick labels
+        top=title_in,
+        bottom=Margins.bottom + _LEGEND_IN,
+        between_rows=title_in + 0.1,
+        between_columns=0.2,
     )
-    fig, axes = panel_grid(
-        rows, max(1, len(delays)), 11.0, 0.7 + 2.5 * rows, margins, sharex=True, sharey="row"
-    )
+    height = 0.7 + (2.5 + (title_lines - 2) * LINE_IN) * rows
+    fig, axes = panel_grid(rows, columns, 11.0, height, margins, sharex=True, sharey="row")
     for ax in axes.flat:
         ax.set_visible(False)
     for tp in points:
@@ -194,18 +215,32 @@ def model_fit_figure(results: WalkingResults) -> Figure:
         t_ms = tp.time_s * 1000.0
         _band(ax, t_ms, tp.torque, _COLORS[tp.direction], "measured (mean ± sd)")
         ax.plot(t_ms, tp.model_torque.mean(axis=0), "k--", lw=1.2, label="model I θ'' + b θ' + k θ")
-        set_title(
-            ax,
-            f"{_DIRECTION_WORDS[tp.direction]}, {tp.delay_ms:g} ms\n"
-            f"k = {tp.stiffness.mean:.0f} N·m/rad, VAF {tp.vaf.mean:.1f} %",
-            fontsize="medium",
-        )
-        ax.set_xlabel("time after onset (ms)")
-        ax.set_ylabel("torque (N·m)")
-        ax.label_outer()
+        lines = [
+            f"{_DIRECTION_WORDS[tp.direction]}, {tp.delay_ms:g} ms",
+            f"k = {tp.stiffness.mean:.0f} N·m/rad",
+            f"VAF {tp.vaf.mean:.1f} %",
+        ]
+        if title_lines == 2:
+            lines[1:] = [", ".join(lines[1:])]
+        set_title(ax, "\n".join(lines), fontsize="medium")
+    _label_outer_panels(axes, "time after onset (ms)", "torque (N·m)")
     if points:
-        _legend_below(fig, next(ax for ax in axes.flat if ax.get_visible()), ncols=2)
+        _legend_below(fig, next(ax for ax in axes.flat if ax.get_visible()))
     return fig
+
+
+def _label_outer_panels(axes: Any, xlabel: str, ylabel: str) -> None:
+    """Tick labels and axis labels on the outer visible panels of a grid whose rows share y and
+    whose columns share x: y on the first visible panel of each row, x on the last visible
+    panel of each column (``label_outer`` would leave a row without a scale when its first
+    condition is missing)."""
+    shown = np.array([[ax.get_visible() for ax in row] for row in axes])
+    for (r, c), ax in np.ndenumerate(axes):
+        first, last = not shown[r, :c].any(), not shown[r + 1 :, c].any()
+        ax.yaxis.set_tick_params(labelleft=first)
+        ax.set_ylabel(ylabel if first else "")
+        ax.xaxis.set_tick_params(labelbottom=last)
+        ax.set_xlabel(xlabel if last else "")
 
 
 WALKING_FIGURES = (

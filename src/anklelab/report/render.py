@@ -64,7 +64,12 @@ def _prepare_worker(modules: Sequence[str]) -> None:
 def _exit_at_once() -> None:
     """End a worker without tearing its interpreter down: with matplotlib loaded that took
     0.3 s, which the command waited for when it shut the pool down. A worker holds no file
-    and has sent every result by then (the result queue is written synchronously)."""
+    and has sent every result by then (the result queue is written synchronously).
+
+    Its exit code is then 0 even when it dies of an error outside a task (its traceback is
+    still printed). Nothing reads it: the pool sees a dead worker by its process sentinel and
+    breaks, and the figures are drawn in the calling process.
+    """
     for stream in (sys.stdout, sys.stderr):
         if stream is not None:
             stream.flush()
