@@ -361,6 +361,22 @@ def test_line_numbers_count_blank_lines(session_dir):
         read_directory(session_dir)
 
 
+@pytest.mark.parametrize("newline", ["\n", "\r\n"])
+@pytest.mark.parametrize("ending", ["", "one newline", "blank lines"])
+@pytest.mark.parametrize("blank_inside", [False, True])
+def test_line_numbers_hold_for_any_line_ending(session_dir, newline, ending, blank_inside):
+    """The line a message names, whatever ends the lines and the file."""
+    path = session_dir / TRIAL
+    set_cell(path, 8, "fz1", "nan")
+    lines = path.read_text().rstrip("\n").split("\n")
+    if blank_inside:
+        lines.insert(3, "")  # the bad cell moves to line 9
+    tail = {"": "", "one newline": newline, "blank lines": newline * 3}[ending]
+    path.write_bytes((newline.join(lines) + tail).encode())
+    with pytest.raises(SessionFormatError, match=rf"column 'fz1', line {8 + blank_inside}:"):
+        read_directory(session_dir)
+
+
 def test_tolerated_variations(session_dir):
     """BOM, CRLF, spaces after commas, quoted numbers, unknown files, integer sample rate."""
     path = session_dir / TRIAL
