@@ -93,10 +93,10 @@ def filters_figure(filters: PlatformFilters) -> Figure:
     the decaying response itself.
     """
     legend_in = _PANEL_LEGEND_ROWS * SMALL_LINE_IN + LINE_IN  # x label, then the legend
-    below = [legend_in if n_lags > 1 else 0.0 for n_lags in filters.lags]  # a panel's legend
+    legends = [n_lags > 1 for n_lags in filters.lags]  # a filter drawn by lag has a legend below
     margins = Margins(
-        bottom=Margins.bottom + below[-1],
-        between_rows=0.6 + max((b + 0.25 if b else 0.0 for b in below[:-1]), default=0.0),
+        bottom=Margins.bottom + legend_in * legends[-1],
+        between_rows=0.6 + (legend_in + 0.25) * any(legends[:-1]),
     )
     fig, axes = panel_grid(len(filters.inputs), 2, 11.0, 3.1 * len(filters.inputs), margins)
     for row, (name, n_lags) in enumerate(zip(filters.inputs, filters.lags, strict=True)):
