@@ -6,7 +6,7 @@ from scipy.integrate import solve_ivp
 
 from anklelab.errors import NotFittedError, ParameterError
 from anklelab.ident import ImpedanceModel, fit_impedance, impedance_torque
-from anklelab.signals import kinematics
+from anklelab.signals import kinematics, lowpass
 
 FS = 1000.0
 K, B, INERTIA = 1200.0, 2.5, 0.3
@@ -135,6 +135,33 @@ def test_linear_model_over_windows_and_repetitions_matches_separate_fits():
             assert np.allclose([g[w, r] for g in got], coef, rtol=1e-8)
             res = torque[r, :n] - x @ coef
             assert fits.vaf[w, r] == pytest.approx(100 * (1 - res.var() / torque[r, :n].var()))
+
+
+def test_low_passed_data_need_the_low_passed_product_of_time_and_the_raw_angle():
+    """``L(k(t) θ) ≠ k(t) L(θ)``: after paper 000's 20 Hz low-pass the slope's regressor must be
+    ``L(t θ)`` of the unfiltered angle; ``t L(θ)`` reads the damping high and the stiffness low."""
+    pad = np.zeros(300)  # the window sits far from the record's ends (the filter's edges)
+    theta = np.concatenate([pad, _smooth_ramp(), np.full(300, _smooth_ramp()[-1])])
+    kin_raw = kinematics(theta, FS, 5)
+    t = (np.arange(theta.size) - pad.size) / FS  # time from the window's start
+    torque = (K0 + K1 * t) * theta + B * kin_raw[1] + INERTIA * kin_raw[2]
+    theta_f, torque_f = lowpass(theta, FS, 20.0), lowpass(torque, FS, 20.0)
+    window = slice(pad.size, pad.size + 100)
+    kin = kinematics(theta_f, FS, 5)[:, window]
+    product = lowpass(t * theta, FS, 20.0)[window]
+    weight = theta_f[window] ** 2
+    expected = K0 + K1 * (weight @ t[window]) / weight.sum()  # θ²-weighted, as filtered
+    fit = fit_impedance(kin, torque_f[window], stiffness_model="linear", fs=FS, time_angle=product)
+    assert [fit.stiffness, fit.stiffness_slope, fit.damping, fit.inertia] == pytest.approx(
+        [expected, K1, B, INERTIA], rel=1e-9
+    )
+    assert np.allclose(
+        impedance_torque(fit, kin, FS, time_angle=product), torque_f[window], atol=1e-9
+    )
+    plain = fit_impedance(kin, torque_f[window], stiffness_model="linear", fs=FS)
+    assert plain.damping > 1.03 * B and plain.stiffness < 0.997 * expected
+    with pytest.raises(ParameterError, match="time_angle"):
+        fit_impedance(kin, torque_f[window], stiffness_model="linear", fs=FS, time_angle=t)
 
 
 def test_linear_model_estimator_and_model_torque():

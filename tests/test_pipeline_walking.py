@@ -96,9 +96,19 @@ class MiniSession:
     """A small session with known impedance; ``expected_cop`` holds each condition's lever arm."""
 
     def __init__(
-        self, geometry, *, n_per_point=16, n_unperturbed=40, delays=(150.0, 300.0), seed=0
+        self,
+        geometry,
+        *,
+        n_per_point=16,
+        n_unperturbed=40,
+        delays=(150.0, 300.0),
+        seed=0,
+        stiffness_rise=0.0,
+        noise=1.0,
     ):
         rng = np.random.default_rng(seed)
+        self.stiffness_rise = stiffness_rise  # N·m/rad/s from the onset
+        self.noise = noise  # scale of the channels' noise
         self.geometry = geometry
         self.heel_to_ankle, self.ankle_height = 0.05, 0.09
         self.expected_cop: dict[str, float] = {}
@@ -154,7 +164,8 @@ class MiniSession:
             for arr, tpl in zip((theta, vel, acc), templates[direction], strict=True):
                 arr[onset : onset + m] = tpl[:m]
                 arr[onset + m :] = tpl[m - 1] if arr is theta else 0.0
-            torque = K * theta + B * vel + INERTIA * acc
+            stiffness = K + self.stiffness_rise * (np.arange(n) - onset) / FS
+            torque = stiffness * theta + B * vel + INERTIA * acc
             cop = cop_nominal + np.divide(torque, grf_z, out=np.zeros(n), where=grf_z > 1.0)
             motor, ankle = theta, ankle + theta
             self.true_onset_ms.setdefault(key, []).append(onset - contact)
@@ -167,8 +178,8 @@ class MiniSession:
             self.expected_cop[key] = float(np.mean(self.cop_sum[key]))
         force, point = _plate_load(grf_x, grf_z, cop, self.geometry)
         channels = channels_from_load(force, np.nan_to_num(point), self.geometry, axis=0)
-        channels = channels + _plate_forces(motor) + rng.normal(0, 0.5, (8, n))
-        ankle_measured = ankle + rng.normal(0, 1e-3, n)
+        channels = channels + _plate_forces(motor) + self.noise * rng.normal(0, 0.5, (8, n))
+        ankle_measured = ankle + self.noise * rng.normal(0, 1e-3, n)
         rec = _recording(f"t{number}.csv", np.round(motor, 4), channels, ankle_measured)
         return WalkingTrial(number, rec, perturbed, direction, delay)
 
@@ -241,6 +252,33 @@ def test_recovers_known_impedance_in_both_directions(mini, analysed):
         true = np.sort(mini.true_onset_ms[key])
         assert np.allclose(np.sort(tp.onset_ms), true, atol=1.5)
         assert set(tp.window_stiffness) == {"75", "125"}
+
+
+def test_a_stiffness_rising_in_time_is_fitted_before_the_low_pass():
+    """Two noise-free sessions alike but for a stiffness rising by 3000 N·m/rad/s (26 % of K per
+    100 ms) from the onset in one. The linear model's slope term is the low-passed product of
+    time and the raw angle, so the rise moves nothing but the stiffness's θ²-weighted value and
+    the slope. Formed from the low-passed angle, it read the damping 13 % of B higher on the
+    rising foot, the stiffness 0.26 % lower and the inertia 1 % lower."""
+    template = _perturbation(0.035)[0][:100] ** 2
+    centre = template @ (np.arange(100) / FS) / template.sum()
+    settings = WalkingSettings(stiffness_model="linear", bootstrap_reps=20, **RIGID)
+    flat, rising = (
+        analyze_walking(
+            MiniSession(
+                GEOMETRIES["+x"], n_per_point=40, stiffness_rise=rise, seed=3, noise=0.0
+            ).session,
+            settings,
+        ).timing_points
+        for rise in (0.0, 3000.0)
+    )
+    for f, r in zip(flat, rising, strict=True):
+        assert r.stiffness.mean / (K + 3000.0 * centre) == pytest.approx(
+            f.stiffness.mean / K, abs=3e-4
+        ), r.key
+        assert r.stiffness_slope.mean - f.stiffness_slope.mean == pytest.approx(3000.0, rel=0.01)
+        assert r.damping.mean == pytest.approx(f.damping.mean, abs=0.01 * B), r.key
+        assert r.inertia.mean == pytest.approx(f.inertia.mean, abs=0.002 * INERTIA), r.key
 
 
 def test_linear_stiffness_model_recovers_constant_impedance_and_reports_the_slope(mini):

@@ -19,6 +19,14 @@ ramp-and-hold perturbation (its velocity comes early in the window, where ``t < 
 rising stiffness is absorbed partly by the damping and inertia and biases ``k``. The model is
 fitted as ``(k - k₁ t_c) θ + k₁ t θ`` (regressors ``θ, θ', θ'', t θ``, one cumulative sum as
 above) and ``k`` recovered with the window's own ``t_c``.
+
+**Low-passed data.** A low-pass ``L`` does not commute with a stiffness that changes in time:
+``L(k(t) θ) ≠ k(t) L(θ)``. Where the torque and the angle were low-passed (paper 000's 20 Hz),
+the regressor of ``k₁`` must be ``L(t θ)``, the product of time and the *unfiltered* angle passed
+through the same low-pass (``time_angle``); then ``L(T) = I L(θ)'' + b L(θ)' + k L(θ) + k₁ L(t θ)``
+holds exactly. The product of the filtered angle, ``t L(θ)``, instead reads the damping high:
+for a stiffness rising linearly by 43 % per 150 ms under a 75 ms ramp-and-hold, low-passed at
+20 Hz, by 4 % (stiffness −0.4 %, inertia −1.4 %); with ``L(t θ)`` the fit is exact.
 """
 
 from __future__ import annotations
@@ -82,6 +90,15 @@ def _sample_rate(fs: float | None) -> float:
     return float(fs)
 
 
+def _check_product(time_angle: ArrayLike, torque: NDArray[np.float64]) -> NDArray[np.float64]:
+    product = np.asarray(time_angle, dtype=float)
+    if product.shape != torque.shape:
+        raise ParameterError(
+            f"time_angle: expected the torque's shape {torque.shape}, got {product.shape}"
+        )
+    return product
+
+
 def _check_model(stiffness_model: str) -> bool:
     """True for the linear stiffness model."""
     if stiffness_model not in ("constant", "linear"):
@@ -98,6 +115,7 @@ def fit_impedance(
     *,
     stiffness_model: StiffnessModel = "constant",
     fs: float | None = None,
+    time_angle: ArrayLike | None = None,
 ) -> ImpedanceFit:
     """Fit ``T = I θ'' + b θ' + k θ`` over windows that start at the first sample.
 
@@ -115,6 +133,10 @@ def fit_impedance(
         ``t_c`` and ``k₁`` is returned as ``stiffness_slope``.
     fs : float, optional
         Sample rate, Hz (the time axis of the linear stiffness model; needed only by it).
+    time_angle : array_like, shape (..., n_times), optional
+        The linear model's regressor of ``k₁``: time from the first sample, s, times the
+        unfiltered angle, rad, low-passed as the torque and ``θ`` were (see the module
+        docstring). Omitted: ``t θ`` from the ``θ`` given, right for unfiltered data.
 
     Returns
     -------
@@ -153,8 +175,9 @@ def fit_impedance(
         )
     x = np.moveaxis(kin, -2, -1)  # (..., n_times, 3)
     if linear:
-        time_theta = np.arange(n_times) / _sample_rate(fs) * kin[..., 0, :]
-        x = np.concatenate([x, time_theta[..., None]], axis=-1)  # (..., n_times, 4)
+        time = np.arange(n_times) / _sample_rate(fs)
+        product = time * kin[..., 0, :] if time_angle is None else _check_product(time_angle, tq)
+        x = np.concatenate([x, product[..., None]], axis=-1)  # (..., n_times, 4)
     scale = np.sqrt((x[..., : sizes.max(), :] ** 2).mean(axis=-2, keepdims=True))
     scale = np.where(scale > 0, scale, 1.0)
     x = x / scale
@@ -173,9 +196,9 @@ def fit_impedance(
     coef = coef / scale
     stiffness, slope = coef[..., 0], np.zeros_like(coef[..., 0])
     if linear:
-        # (k - k1 t_c) θ + k1 t θ: the θ coefficient is moved to t_c = Σ t θ² / Σ θ², which the
-        # Gram matrix already holds (its (θ, t θ) and (θ, θ) entries, undone from the scaling)
-        centre = gram[..., 0, 3] / gram[..., 0, 0] * (scale[..., 3] / scale[..., 0])
+        # (k - k1 t_c) θ + k1 t θ: the θ coefficient is moved to t_c = Σ t θ² / Σ θ²
+        weight = kin[..., 0, :] ** 2
+        centre = np.cumsum(weight * time, axis=-1)[..., end] / np.cumsum(weight, axis=-1)[..., end]
         slope = coef[..., 3]
         stiffness = stiffness + slope * centre
     fields = (stiffness, coef[..., 1], coef[..., 2], vaf_percent, slope)
@@ -185,7 +208,11 @@ def fit_impedance(
 
 
 def impedance_torque(
-    fit: ImpedanceFit, kinematics: ArrayLike, fs: float | None = None
+    fit: ImpedanceFit,
+    kinematics: ArrayLike,
+    fs: float | None = None,
+    *,
+    time_angle: ArrayLike | None = None,
 ) -> NDArray[np.float64]:
     """Model torque of a fit, N·m, shape ``(..., n_times)``.
 
@@ -199,19 +226,22 @@ def impedance_torque(
     fs : float, optional
         Sample rate, Hz; needed when the fit has a stiffness slope (its ``t_c`` is the
         θ²-weighted mean time of these kinematics).
+    time_angle : array_like, shape (..., n_times), optional
+        The slope's regressor, as given to :func:`fit_impedance` (default ``t θ``).
     """
     kin = np.asarray(kinematics, dtype=float)
     theta = kin[..., 0, :]
     slope = np.asarray(fit.stiffness_slope, dtype=float)[..., None]
-    stiffness = np.asarray(fit.stiffness, dtype=float)[..., None]
+    model = np.asarray(fit.stiffness, dtype=float)[..., None] * theta
     if np.any(slope != 0):
         t = np.arange(theta.shape[-1]) / _sample_rate(fs)
         weight = theta**2
         centre = (weight @ t)[..., None] / weight.sum(axis=-1, keepdims=True)
-        stiffness = stiffness + slope * (t - centre)
+        product = t * theta if time_angle is None else np.asarray(time_angle, dtype=float)
+        model = model + slope * (product - centre * theta)
     damping = np.asarray(fit.damping, dtype=float)[..., None]
     inertia = np.asarray(fit.inertia, dtype=float)[..., None]
-    return stiffness * theta + damping * kin[..., 1, :] + inertia * kin[..., 2, :]
+    return model + damping * kin[..., 1, :] + inertia * kin[..., 2, :]
 
 
 class ImpedanceModel(Estimator):

@@ -61,6 +61,7 @@ DIRECTIONS = ("dorsi", "plantar")
 KINEMATICS = ("angle", "velocity", "acceleration")
 _KIN = [RESPONSE.index(name) for name in KINEMATICS]
 _TORQUE = RESPONSE.index("torque")
+_TIME_ANGLE = RESPONSE.index("time_angle")
 _FULL = 0  # row of the all-trial average among the stacked averages
 _SYSTEMATIC = ("stiffness", "damping", "inertia")  # quantities whose intervals are widened
 
@@ -74,7 +75,7 @@ def condition_order(stance: Trials) -> list[str]:
 
 def _resampled(responses: Responses, n_reps: int, rng: np.random.Generator) -> NDArray[np.float64]:
     """Averages over ``n_reps`` resamples (with replacement) of perturbed and unperturbed
-    trials, shape ``(n_reps, 4, n_window)``."""
+    trials, shape ``(n_reps, 5, n_window)``."""
     data, baseline = responses.perturbed.data, responses.unperturbed
     n_p, n_u = len(data), len(baseline)
     counts_p = rng.multinomial(n_p, np.full(n_p, 1.0 / n_p), size=n_reps) / n_p
@@ -82,9 +83,17 @@ def _resampled(responses: Responses, n_reps: int, rng: np.random.Generator) -> N
     return np.tensordot(counts_p, data, axes=1) - np.tensordot(counts_u, baseline, axes=1)
 
 
-def _fit(averages: NDArray[np.float64], lengths: list[int], model: str, fs: float) -> ImpedanceFit:
+def _fit(
+    averages: NDArray[np.float64], lengths: list[int] | None, model: str, fs: float
+) -> ImpedanceFit:
+    """The impedance of stacked response averages (channels :data:`RESPONSE`)."""
     return fit_impedance(
-        averages[:, _KIN], averages[:, _TORQUE], lengths=lengths, stiffness_model=model, fs=fs
+        averages[:, _KIN],
+        averages[:, _TORQUE],
+        lengths=lengths,
+        stiffness_model=model,
+        fs=fs,
+        time_angle=averages[:, _TIME_ANGLE],
     )
 
 
@@ -119,16 +128,14 @@ def _systematic(
 
     Returns the largest absolute move per quantity (``stiffness``, ``damping``, ``inertia``).
     """
-    kin, torque = full[:, _KIN], full[:, _TORQUE]
     variants = []
     if shift and full.shape[-1] >= n + shift:
         for lead in (shift, -shift):  # torque later / earlier than the kinematics
             k0, t0 = (0, lead) if lead > 0 else (-lead, 0)
-            variants.append(
-                fit_impedance(
-                    kin[..., k0 : k0 + n], torque[..., t0 : t0 + n], stiffness_model=model, fs=fs
-                )
-            )
+            shifted = full[..., k0 : k0 + n].copy()
+            shifted[:, _TORQUE] = full[:, _TORQUE, t0 : t0 + n]
+            shifted[:, _TIME_ANGLE] -= k0 / fs * shifted[:, _KIN[0]]  # time from the window start
+            variants.append(_fit(shifted, None, model, fs))
     moves = {}
     for name, value in centre.items():
         fits = variants if name == "stiffness" or by_window is None else [*variants, by_window]
@@ -295,7 +302,9 @@ def estimate_timing_point(
         time_s=np.arange(n) / fs,
         angle=subset_avg[:, RESPONSE.index("angle"), :n],
         torque=subset_avg[:, _TORQUE, :n],
-        model_torque=impedance_torque(analysis, subset_avg[:, _KIN, :n], fs),
+        model_torque=impedance_torque(
+            analysis, subset_avg[:, _KIN, :n], fs, time_angle=subset_avg[:, _TIME_ANGLE, :n]
+        ),
     )
 
 

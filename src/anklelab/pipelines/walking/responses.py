@@ -32,9 +32,11 @@ from anklelab.signals import Trials
 
 __all__ = ["RESPONSE", "Responses", "condition_responses", "outliers"]
 
-RESPONSE = ("angle", "velocity", "acceleration", "torque")
-"""Channels of a response: rad, rad/s, rad/s², N·m."""
-_OFFSETS = [RESPONSE.index("angle"), RESPONSE.index("torque")]
+RESPONSE = ("angle", "velocity", "acceleration", "torque", "time_angle")
+"""Channels of a response: rad, rad/s, rad/s², N·m, and rad·s: the time since the onset times
+the unfiltered angle, low-passed (the regressor of a stiffness that changes in time)."""
+_ANGLE, _TIME_ANGLE = RESPONSE.index("angle"), RESPONSE.index("time_angle")
+_OFFSETS = [_ANGLE, RESPONSE.index("torque")]
 _SCREENED = [RESPONSE.index("angle"), RESPONSE.index("torque")]
 _MAD_TO_SD = 1.4826
 _MIN_SCREENED = 5  # the median and MAD of 5 still stand one wild trial in 5 (a 1e6 N glitch)
@@ -49,7 +51,7 @@ class Responses:
     perturbed : Trials
         One response per kept perturbed trial, channels :data:`RESPONSE`, time 0 at the onset;
         metadata ``trial``, ``onset_ms``, ``offset`` (onset, samples after heel contact).
-    unperturbed : ndarray, shape (n_unperturbed, 4, n_window)
+    unperturbed : ndarray, shape (n_unperturbed, 5, n_window)
         The unperturbed trials' departures at the median onset, adjusted like the responses
         (mean zero): what the nominal's sampling error adds.
     nominal_dx : ndarray, shape (n_window,)
@@ -75,13 +77,21 @@ def _departures(
     reference: int,
     n_window: int,
 ) -> NDArray[np.float64]:
-    """Each trial's :data:`RESPONSE` channels minus the nominal, offsets removed."""
+    """Each trial's :data:`RESPONSE` channels minus the nominal, offsets removed.
+
+    The stance's ``time_angle`` counts time from heel contact; the response's counts it from the
+    onset, with the angle's offset ``c`` taken out like the angle's: ``L((t - t_on) (θ - c)) =
+    L(t θ) - t_on L(θ) - c (t - t_on)`` (the zero-phase low-pass ``L`` keeps a straight line).
+    """
     index = np.concatenate(
         [np.maximum(onset - reference, 0)[:, None], onset[:, None] + np.arange(n_window)], axis=1
     )
     picks = [stance.ch_names.index(name) for name in RESPONSE]
     segment = np.take_along_axis(stance.data[:, picks], index[:, None, :], axis=-1)
     departure = segment - nominal[picks][:, index].transpose(1, 0, 2)
+    since_onset = (index - onset[:, None]) / stance.fs
+    angle = departure[:, _ANGLE]
+    departure[:, _TIME_ANGLE] -= onset[:, None] / stance.fs * angle + angle[:, :1] * since_onset
     departure[:, _OFFSETS] -= departure[:, _OFFSETS, :1]
     return departure[..., 1:]
 

@@ -52,9 +52,12 @@ STANCE_CHANNELS = (
     "torque_raw",
     "grf_z_raw",
     "angle_raw",
+    "time_angle",
 )
 """Channels of the heel-contact-aligned stance trials (rad, rad/s, rad/s², N·m, m, N, rad; the
-``_raw`` ones unfiltered and uncorrected for the platform, N·m, N, rad)."""
+``_raw`` ones unfiltered and uncorrected for the platform, N·m, N, rad; ``time_angle``, rad·s,
+is the time since heel contact times the unfiltered angle, low-passed like the angle: the
+regressor of a stiffness that changes in time, see :func:`anklelab.ident.fit_impedance`)."""
 _MISMATCH = "onset differs from the manifest's delay_ms"
 
 
@@ -322,7 +325,10 @@ def _stance_block(
         # wrecked sessions with a stiff foot (walking-analysis guide)
         grf_z, torque, dx = foot_load(motor - np.nan_to_num(torque) / stiffness)
     ankle = lowpass(ankle_raw, **lp)
-    kin = kinematics(ankle - ankle[rows, event][:, None], fs, settings.derivative_window)
+    ankle_at_contact = ankle[rows, event][:, None]
+    kin = kinematics(ankle - ankle_at_contact, fs, settings.derivative_window)
+    since_contact = (np.arange(width) - event[:, None]) / fs
+    time_angle = lowpass(since_contact * (ankle_raw - ankle_at_contact), **lp)
     onsets = perturbation_onset(
         motor, start=event, min_amplitude_rad=settings.onset_min_amplitude_rad
     )
@@ -338,7 +344,8 @@ def _stance_block(
         "motor_angle": motor,
         "torque_raw": moment_raw - lever * grf_z_raw + grf_x_raw * info.ankle_height_m,
         "grf_z_raw": grf_z_raw,
-        "angle_raw": ankle_raw - ankle[rows, event][:, None],
+        "angle_raw": ankle_raw - ankle_at_contact,
+        "time_angle": time_angle,
     }
     window = np.minimum(event[:, None] + np.arange(n_stance), width - 1)
     stance = np.stack(  # only the stance of each channel is copied
