@@ -53,11 +53,14 @@ STANCE_CHANNELS = (
     "grf_z_raw",
     "angle_raw",
     "time_angle",
+    "torque_untwisted",
 )
 """Channels of the heel-contact-aligned stance trials (rad, rad/s, rad/s², N·m, m, N, rad; the
 ``_raw`` ones unfiltered and uncorrected for the platform, N·m, N, rad; ``time_angle``, rad·s,
 is the time since heel contact times the unfiltered angle, low-passed like the angle: the
-regressor of a stiffness that changes in time, see :func:`anklelab.ident.fit_impedance`)."""
+regressor of a stiffness that changes in time, see :func:`anklelab.ident.fit_impedance`;
+``torque_untwisted``, N·m, is ``torque`` without the coupler's twist, the plate's own forces
+predicted from the motor angle alone)."""
 _MISMATCH = "onset differs from the manifest's delay_ms"
 
 
@@ -317,6 +320,7 @@ def _stance_block(
         return grf_z, torque, dx
 
     grf_z, torque, dx = foot_load(motor)
+    untwisted = torque
     if stiffness := settings.transmission_stiffness_nm_per_rad:
         # the foot's torque twists the coupler: the plate's own forces follow the plate, which
         # lags the motor by T/K (the hinge is on the ankle's axis, so T is the load about it).
@@ -346,6 +350,7 @@ def _stance_block(
         "grf_z_raw": grf_z_raw,
         "angle_raw": ankle_raw - ankle_at_contact,
         "time_angle": time_angle,
+        "torque_untwisted": untwisted,
     }
     window = np.minimum(event[:, None] + np.arange(n_stance), width - 1)
     stance = np.stack(  # only the stance of each channel is copied
