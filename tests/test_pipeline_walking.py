@@ -895,13 +895,15 @@ def test_cli_prints_the_model_and_the_change(human_session, tmp_path):
     result = CliRunner().invoke(app, args)
     assert result.exit_code == 0, result.output
     rows = {line.split()[0]: line for line in result.output.splitlines() if "/" in line[:14]}
-    assert "linear Δ" in rows["dorsi/225"] and "constant" in rows["dorsi/475"]
-    # every point's mark is its verdict's: Δ changes, Δ? undetermined, none constant
+    assert "linear Δ" in rows["dorsi/225"]
+    # every point's row names its model, and its mark is its verdict's: Δ changes, Δ?
+    # undetermined, none constant
     document = json.loads((tmp_path / "out" / "results.json").read_text())
     marks = {"changes": " Δ ", "undetermined": " Δ? ", "constant": ""}
     for point in document["timing_points"]:
         row = rows[f"{point['direction']}/{point['delay_ms']:g}"]
         verdict = point["stiffness_change_verdict"]
+        assert f" {point['stiffness_model']} " in row, row
         assert marks[verdict] in row and (verdict != "constant" or "Δ" not in row), row
 
 

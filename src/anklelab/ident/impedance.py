@@ -90,6 +90,16 @@ def _sample_rate(fs: float | None) -> float:
     return float(fs)
 
 
+def _window_sums(values: NDArray[np.float64], sizes: NDArray[np.int64], axis: int) -> NDArray:
+    """Sums of ``values`` over the first ``size`` samples along ``axis``, for each of ``sizes``
+    (that axis becomes the windows' axis): the segments between the sorted sizes are summed
+    once, then accumulated."""
+    bounds = np.unique(sizes)
+    upto = values[(Ellipsis, slice(0, bounds[-1])) + (slice(None),) * (-1 - axis)]
+    segments = np.add.reduceat(upto, np.concatenate([[0], bounds[:-1]]), axis=axis)
+    return np.take(np.cumsum(segments, axis=axis), np.searchsorted(bounds, sizes), axis=axis)
+
+
 def _check_product(time_angle: ArrayLike, torque: NDArray[np.float64]) -> NDArray[np.float64]:
     product = np.asarray(time_angle, dtype=float)
     if product.shape != torque.shape:
@@ -181,12 +191,11 @@ def fit_impedance(
     scale = np.sqrt((x[..., : sizes.max(), :] ** 2).mean(axis=-2, keepdims=True))
     scale = np.where(scale > 0, scale, 1.0)
     x = x / scale
-    end = sizes - 1
-    gram = np.cumsum(x[..., :, None] * x[..., None, :], axis=-3)[..., end, :, :]
-    cross = np.cumsum(x * tq[..., None], axis=-2)[..., end, :]
-    sum_x = np.cumsum(x, axis=-2)[..., end, :]
-    sum_t = np.cumsum(tq, axis=-1)[..., end]
-    sum_tt = np.cumsum(tq**2, axis=-1)[..., end]
+    gram = _window_sums(x[..., :, None] * x[..., None, :], sizes, axis=-3)
+    cross = _window_sums(x * tq[..., None], sizes, axis=-2)
+    sum_x = _window_sums(x, sizes, axis=-2)
+    sum_t = _window_sums(tq, sizes, axis=-1)
+    sum_tt = _window_sums(tq**2, sizes, axis=-1)
     coef = np.linalg.solve(gram, cross[..., None])[..., 0]  # (..., n_windows, n_regressors)
     res_ss = sum_tt - 2 * (coef * cross).sum(-1) + np.einsum("...i,...ij,...j", coef, gram, coef)
     res_mean = (sum_t - (coef * sum_x).sum(-1)) / sizes
@@ -198,7 +207,7 @@ def fit_impedance(
     if linear:
         # (k - k1 t_c) θ + k1 t θ: the θ coefficient is moved to t_c = Σ t θ² / Σ θ²
         weight = kin[..., 0, :] ** 2
-        centre = np.cumsum(weight * time, axis=-1)[..., end] / np.cumsum(weight, axis=-1)[..., end]
+        centre = _window_sums(weight * time, sizes, -1) / _window_sums(weight, sizes, -1)
         slope = coef[..., 3]
         stiffness = stiffness + slope * centre
     fields = (stiffness, coef[..., 1], coef[..., 2], vaf_percent, slope)

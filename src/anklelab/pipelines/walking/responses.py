@@ -32,12 +32,13 @@ from anklelab.signals import Trials
 
 __all__ = ["RESPONSE", "Responses", "condition_responses", "outliers"]
 
-RESPONSE = ("angle", "velocity", "acceleration", "torque", "time_angle", "torque_untwisted")
-"""Channels of a response: rad, rad/s, rad/s², N·m; rad·s: the time since the onset times the
-unfiltered angle, low-passed (the regressor of a stiffness that changes in time); N·m: the
-torque without the coupler's twist (how much the estimates lean on that correction)."""
-_ANGLE, _TIME_ANGLE = RESPONSE.index("angle"), RESPONSE.index("time_angle")
-_OFFSETS = [_ANGLE, RESPONSE.index("torque"), RESPONSE.index("torque_untwisted")]
+RESPONSE = ("angle", "velocity", "acceleration", "torque", "time_angle")
+"""Channels of a response: rad, rad/s, rad/s², N·m, and rad·s: the time since the onset times
+the unfiltered angle, low-passed (the regressor of a stiffness that changes in time)."""
+_CUT = (*RESPONSE, "torque_untwisted")  # cut from the stance: the responses, then the torque
+# without the coupler's twist correction, which only its average leaves
+_ANGLE, _TORQUE, _TIME_ANGLE = (RESPONSE.index(name) for name in ("angle", "torque", "time_angle"))
+_OFFSETS = [_ANGLE, _TORQUE, len(RESPONSE)]
 _SCREENED = [RESPONSE.index("angle"), RESPONSE.index("torque")]
 _MAD_TO_SD = 1.4826
 _MIN_SCREENED = 5  # the median and MAD of 5 still stand one wild trial in 5 (a 1e6 N glitch)
@@ -52,11 +53,14 @@ class Responses:
     perturbed : Trials
         One response per kept perturbed trial, channels :data:`RESPONSE`, time 0 at the onset;
         metadata ``trial``, ``onset_ms``, ``offset`` (onset, samples after heel contact).
-    unperturbed : ndarray, shape (n_unperturbed, 6, n_window)
+    unperturbed : ndarray, shape (n_unperturbed, 5, n_window)
         The unperturbed trials' departures at the median onset, adjusted like the responses
         (mean zero): what the nominal's sampling error adds.
     nominal_dx : ndarray, shape (n_window,)
         Mean nominal lever arm over the perturbed trials' windows, m.
+    twist_torque : ndarray, shape (n_window,)
+        What the torque response loses without the coupler's twist correction (the kept
+        perturbed trials' mean), N·m: how much the estimates lean on that correction.
     explained : float
         Fraction of the torque departures' variance the covariate adjustment removed (0: none).
     dropped : dict of int to str
@@ -67,6 +71,7 @@ class Responses:
     perturbed: Trials
     unperturbed: NDArray[np.float64]
     nominal_dx: NDArray[np.float64]
+    twist_torque: NDArray[np.float64]
     explained: float
     dropped: dict[int, str]
 
@@ -78,7 +83,7 @@ def _departures(
     reference: int,
     n_window: int,
 ) -> NDArray[np.float64]:
-    """Each trial's :data:`RESPONSE` channels minus the nominal, offsets removed.
+    """Each trial's channels ``_CUT`` minus the nominal, offsets removed.
 
     The stance's ``time_angle`` counts time from heel contact; the response's counts it from the
     onset, with the angle's offset ``c`` taken out like the angle's: ``L((t - t_on) (θ - c)) =
@@ -87,8 +92,8 @@ def _departures(
     index = np.concatenate(
         [np.maximum(onset - reference, 0)[:, None], onset[:, None] + np.arange(n_window)], axis=1
     )
-    picks = [stance.ch_names.index(name) for name in RESPONSE]
-    segment = np.take_along_axis(stance.data[:, picks], index[:, None, :], axis=-1)
+    picks = np.array([stance.ch_names.index(name) for name in _CUT])
+    segment = stance.data[np.arange(len(index))[:, None, None], picks[:, None], index[:, None, :]]
     departure = segment - nominal[picks][:, index].transpose(1, 0, 2)
     since_onset = (index - onset[:, None]) / stance.fs
     angle = departure[:, _ANGLE]
@@ -149,9 +154,10 @@ def condition_responses(
     reference = round(settings.offset_reference() * fs / 1000.0)
     nominal = unperturbed.average()
     onset = group.metadata["offset"]
-    response = _departures(group, nominal, onset, reference, n_window)
+    cut = _departures(group, nominal, onset, reference, n_window)
+    response, untwisted = cut[:, :-1], cut[:, -1]
     median_onset = np.full(len(unperturbed), int(np.median(onset)))
-    baseline = _departures(unperturbed, nominal, median_onset, reference, n_window)
+    baseline = _departures(unperturbed, nominal, median_onset, reference, n_window)[:, :-1]
     explained = 0.0
     if settings.covariate_adjustment:
         raw = [stance.ch_names.index(name) for name in FEATURE_CHANNELS]
@@ -167,7 +173,7 @@ def condition_responses(
         adjustment = fit_adjustment(features_u, baseline)
         response = response - adjustment.predict(features_p)
         baseline = baseline - adjustment.predict(features_u)
-        explained = float(adjustment.explained[RESPONSE.index("torque")])
+        explained = float(adjustment.explained[_TORQUE])
     wild = outliers(response[:, _SCREENED], settings.outlier_mads)
     dropped = {
         int(position): f"its response departs from the other {key} trials' median by more than "
@@ -183,6 +189,7 @@ def condition_responses(
         perturbed=Trials(response[~wild], fs, RESPONSE, metadata),
         unperturbed=baseline,
         nominal_dx=nominal[dx][index].mean(axis=0),
+        twist_torque=(untwisted - cut[:, _TORQUE])[~wild].mean(axis=0),
         explained=explained,
         dropped=dropped,
     )

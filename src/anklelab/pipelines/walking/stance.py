@@ -353,10 +353,9 @@ def _stance_block(
         "torque_untwisted": untwisted,
     }
     window = np.minimum(event[:, None] + np.arange(n_stance), width - 1)
-    stance = np.stack(  # only the stance of each channel is copied
-        [np.take_along_axis(channels_by_name[name], window, axis=-1) for name in STANCE_CHANNELS],
-        axis=1,
-    )
+    stance = np.empty((len(walking), len(STANCE_CHANNELS), n_stance))
+    for i, name in enumerate(STANCE_CHANNELS):  # only the stance of each channel is copied
+        stance[:, i] = channels_by_name[name][rows[:, None], window]
     return _StanceBlock(stance, contact, event, cop0, onsets.index, onsets.amplitude)
 
 
