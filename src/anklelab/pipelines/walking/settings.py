@@ -53,8 +53,10 @@ class WalkingSettings(Parameters):
         in series), N·m/rad; paper 000: 12 N·m/arcmin. The platform filters, fitted with nobody
         on the plate, predict the plate's own forces from the motor angle; under the foot's
         torque ``T`` the plate lags the motor by the coupler's twist ``T / K``, so the filters
-        are fed the motor angle minus that twist (see :func:`~.stance.stance_trials`). 0: the
-        motor angle is taken as the plate's angle, as in paper 000.
+        are fed the motor angle minus that twist (see :func:`~.stance.stance_trials`). The
+        correction's whole move of each estimate counts in its 95 % interval (it is
+        quasi-static and assumes this stiffness). 0: the motor angle is taken as the plate's
+        angle, as in paper 000 (no correction, nothing added to the intervals).
     force_delay_ms
         How much later the plate's channels are recorded than the angles, ms: an amplifier's
         anti-alias low-pass (a 4th-order Butterworth at ``f`` Hz delays by about
