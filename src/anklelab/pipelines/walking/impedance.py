@@ -7,8 +7,10 @@ changes linearly within the window (``k + k₁ (t - t_c)``, ``t_c`` the θ²-wei
 
 **Intervals.** The averages are resampled: perturbed trials drawn with replacement, and the
 unperturbed trials' residual departures too (the nominal stance they were subtracted from is
-itself an average with sampling error). The 2.5 and 97.5 percentiles of the refitted values
-over ``interval_reps`` resamples are the 95 % interval. Paper 000's spread — the sd over 60 %
+itself an average with sampling error). The refitted values' spread over ``interval_reps``
+resamples, scaled by Student's t, gives the random half-width (:func:`_estimate`); what the
+data cannot pin down is added in quadrature (:func:`_systematic`: the timing between angle and
+plate, the window, the coupler's twist correction). Paper 000's spread — the sd over 60 %
 subsets drawn without replacement — is kept beside it as ``sd``, for comparison with the paper;
 it covers random error only and is about 0.8 × the estimate's standard error.
 

@@ -38,7 +38,7 @@ the unfiltered angle, low-passed (the regressor of a stiffness that changes in t
 _CUT = (*RESPONSE, "torque_untwisted")  # cut from the stance: the responses, then the torque
 # without the coupler's twist correction, which only its average leaves
 _ANGLE, _TORQUE, _TIME_ANGLE = (RESPONSE.index(name) for name in ("angle", "torque", "time_angle"))
-_OFFSETS = [_ANGLE, _TORQUE, len(RESPONSE)]
+_OFFSETS = [_ANGLE, _TORQUE, _CUT.index("torque_untwisted")]
 _SCREENED = [RESPONSE.index("angle"), RESPONSE.index("torque")]
 _MAD_TO_SD = 1.4826
 _MIN_SCREENED = 5  # the median and MAD of 5 still stand one wild trial in 5 (a 1e6 N glitch)
