@@ -158,6 +158,10 @@ def test_low_passed_data_need_the_low_passed_product_of_time_and_the_raw_angle()
     assert np.allclose(
         impedance_torque(fit, kin, FS, time_angle=product), torque_f[window], atol=1e-9
     )
+    model = ImpedanceModel(stiffness_model="linear").fit(
+        kin, torque_f[window], fs=FS, time_angle=product
+    )
+    assert model.score(kin, torque_f[window], time_angle=product) == pytest.approx(100.0)
     plain = fit_impedance(kin, torque_f[window], stiffness_model="linear", fs=FS)
     assert plain.damping > 1.03 * B and plain.stiffness < 0.997 * expected
     with pytest.raises(ParameterError, match="time_angle"):

@@ -290,7 +290,12 @@ class ImpedanceModel(Estimator):
         self.stiffness_model = stiffness_model
 
     def fit(
-        self, kinematics: ArrayLike, torque: ArrayLike, *, fs: float | None = None
+        self,
+        kinematics: ArrayLike,
+        torque: ArrayLike,
+        *,
+        fs: float | None = None,
+        time_angle: ArrayLike | None = None,
     ) -> ImpedanceModel:
         """Fit over the whole record.
 
@@ -302,21 +307,29 @@ class ImpedanceModel(Estimator):
             Torque, N·m.
         fs : float, optional
             Sample rate, Hz (needed by the linear stiffness model).
+        time_angle : array_like, shape (..., n_times), optional
+            The linear model's slope regressor for low-passed data (:func:`fit_impedance`).
         """
         self._validate_params()
-        fit = fit_impedance(kinematics, torque, stiffness_model=self.stiffness_model, fs=fs)
+        fit = fit_impedance(
+            kinematics, torque, stiffness_model=self.stiffness_model, fs=fs, time_angle=time_angle
+        )
         self.stiffness_, self.damping_, self.inertia_, self.vaf_, self.stiffness_slope_ = fit
         self.fs_ = fs
         return self
 
-    def predict(self, kinematics: ArrayLike) -> NDArray[np.float64]:
-        """Model torque, N·m, shape ``(..., n_times)``."""
+    def predict(
+        self, kinematics: ArrayLike, *, time_angle: ArrayLike | None = None
+    ) -> NDArray[np.float64]:
+        """Model torque, N·m, shape ``(..., n_times)`` (``time_angle`` as in :meth:`fit`)."""
         self._check_fitted()
         fit = ImpedanceFit(
             self.stiffness_, self.damping_, self.inertia_, self.vaf_, self.stiffness_slope_
         )
-        return impedance_torque(fit, kinematics, self.fs_)
+        return impedance_torque(fit, kinematics, self.fs_, time_angle=time_angle)
 
-    def score(self, kinematics: ArrayLike, torque: ArrayLike) -> float:
+    def score(
+        self, kinematics: ArrayLike, torque: ArrayLike, *, time_angle: ArrayLike | None = None
+    ) -> float:
         """Mean VAF of :meth:`predict` against ``torque``, %."""
-        return float(np.mean(vaf(torque, self.predict(kinematics))))
+        return float(np.mean(vaf(torque, self.predict(kinematics, time_angle=time_angle))))
