@@ -1,6 +1,8 @@
 """The session directory is read safely: only regular files inside it, bounded sizes, clear
 messages that never show more of a file than a short excerpt; CSV parsing and its fallback."""
 
+import io
+import json
 import os
 import shutil
 import subprocess
@@ -349,3 +351,49 @@ def test_fuzz_nullable_cells(cells):
             assert str(exc).startswith("f.csv: ") and "\n" not in str(exc)
             results.append(str(exc))
     assert results[0] == results[1]
+
+
+# --- the truth tree's .npy arrays -----------------------------------------------------------
+
+
+def npy_bytes(array):
+    buffer = io.BytesIO()
+    np.save(buffer, array, allow_pickle=True)
+    return buffer.getvalue()
+
+
+def npy_header(shape):
+    """A .npy file's header for float64 values of ``shape``, without the values."""
+    buffer = io.BytesIO()
+    header = {"descr": "<f8", "fortran_order": False, "shape": shape}
+    np.lib.format.write_array_header_1_0(buffer, header)
+    return buffer.getvalue()
+
+
+@pytest.mark.parametrize(
+    ("name", "content", "pattern"),
+    [
+        ("x.npy", npy_bytes(np.array([{"a": 1}], dtype=object)), r"holds object values"),
+        ("x.npy", npy_bytes(np.array(["a", "b"])), r"holds <U1 values"),
+        ("x.npy", npy_bytes(np.zeros(1000))[:-8], r"header gives 8000 bytes of data, the file "),
+        ("x.npy", npy_header((10**13,)), r"header gives 80000000000000 bytes of data, the "),
+        ("x.npy", b"not an array", r"not a NumPy \.npy file"),
+        ("parameters.npy", npy_bytes(np.zeros(3)), r"parameters: given twice"),
+        ("foot/x.npy", npy_bytes(np.zeros(3)), r"foot: holds a value, not a mapping"),
+    ],
+)
+def test_bad_tree_arrays_are_named(session_dir, name, content, pattern):
+    truth = json.loads((session_dir / "truth.json").read_text())
+    truth["foot"] = 1.0
+    (session_dir / "truth.json").write_text(json.dumps(truth))
+    path = session_dir / "truth" / name
+    path.parent.mkdir(parents=True, exist_ok=True)
+    path.write_bytes(content)
+    message = rejected(session_dir, pattern)
+    assert message.startswith(f"{path}: ")
+
+
+def test_a_tree_array_linked_from_outside_is_refused(session_dir, outside):
+    (session_dir / "truth").mkdir()
+    os.symlink(outside, session_dir / "truth" / "x.npy")
+    rejected(session_dir, r"s/truth/x\.npy: is a link to .*outside the session directory")

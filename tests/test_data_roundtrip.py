@@ -2,6 +2,7 @@
 
 import hashlib
 import math
+import shutil
 import time
 from dataclasses import replace
 
@@ -129,3 +130,27 @@ def test_sessions_remember_where_they_were_read_from(tmp_path):
     for path in (save_session(s, tmp_path / "d", format="dir"), save_session(s, tmp_path / "s.h5")):
         back = load_session(path)
         assert back.source == str(path) and back == replace(back, source="elsewhere")
+
+
+def test_large_tree_arrays_are_npy_files_beside_the_json_and_read_back(tmp_path):
+    time_courses = {"angle.rad": np.linspace(0.0, 1.0, 5000).reshape(50, 100), "..": np.arange(9)}
+    truth = {"time_courses": time_courses, "/odd key": np.ones(4096, dtype=bool)}
+    s = replace(random_session(), truth=truth)
+    d = save_session(s, tmp_path / "d", format="dir")
+    stored = sorted(p.relative_to(d).as_posix() for p in (d / "truth").rglob("*.npy"))
+    assert stored == ["truth/%2Fodd%20key.npy", "truth/time_courses/angle.rad.npy"]
+    assert "angle.rad" not in (d / "truth.json").read_text()  # the small one stays inline
+    assert diff_sessions(read_directory(d), s) == []
+    before = session_hash(d)
+    np.save(d / "truth" / "time_courses" / "angle.rad.npy", time_courses["angle.rad"] + 1)
+    assert session_hash(d) != before
+
+
+def test_a_directory_with_every_array_inside_its_json_still_reads(tmp_path):
+    from anklelab.data._tree import to_json
+
+    s = replace(random_session(), truth={"time_courses": {"a": np.arange(10_000.0)}})
+    d = save_session(s, tmp_path / "d", format="dir")
+    shutil.rmtree(d / "truth")
+    (d / "truth.json").write_text(to_json(s.truth))  # as anklelab wrote it before the .npy files
+    assert diff_sessions(read_directory(d), s) == []
