@@ -1,17 +1,29 @@
-"""IIR filters as second-order sections, designed in closed form and run with NumPy and LAPACK.
+"""IIR filters as second-order sections, designed in closed form and run with NumPy alone.
 
 Paper 000 filters with a bidirectional Butterworth low-pass, and the twin runs its plate
 resonances and amplifier anti-alias filter as second-order sections. Both designs are a few lines
-of the bilinear transform (pre-warped), and the zero-phase filter is two triangular band solves
-per section, so neither needs ``scipy.signal``: importing it costs every command 1-1.7 s of
+of the bilinear transform (pre-warped), and the zero-phase filter is a few matrix products per
+pass (below), so neither needs ``scipy.signal``: importing it costs every command 1-1.7 s of
 start-up (SciPy 1.17 parses the docstring of each of its functions on import), more than the
 whole analysis of a session's filtering.
+
+A pass runs the cascade as one state-space system over blocks of :data:`_SPAN` samples. Within
+a block, the outputs are the block's inputs times a lower-triangular Toeplitz matrix of the
+impulse response, plus the block's initial state times the observability matrix; the state at
+the block's end is the initial state times ``A^span`` plus the inputs times the reachability
+matrix. Every block of every signal thus goes through three matrix products at once, and only
+the state, a few numbers per signal, steps from block to block. On the 5 300 stance signals of
+a paper-size session this takes 0.26 s where a LAPACK triangular band solve per section took
+0.43 s.
 
 The results equal SciPy's ``butter(..., output="sos")`` and ``sosfiltfilt`` (odd extension,
 steady-state initial conditions, the default pad length) to rounding (tests compare them).
 """
 
 from __future__ import annotations
+
+import functools
+import math
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -20,8 +32,14 @@ from anklelab.errors import ParameterError
 
 __all__ = ["butterworth_sos", "edge_padding", "resonance_sos", "sosfiltfilt"]
 
-_BLOCK = 32
-"""Signals filtered together: 32 columns of a few thousand samples fit a core's cache."""
+_SPAN = 16
+"""Samples per block of a pass, at least (the fastest for many signals)."""
+_STEP_COST = 2**15
+"""A step from block to block costs about as much as this many multiply-adds in the block
+products. A pass over ``rows`` signals of ``m`` samples in blocks of ``span`` thus costs about
+``rows m span + _STEP_COST m / span``, least at ``span = sqrt(_STEP_COST / rows)``."""
+_ROWS = 512
+"""Signals filtered together: their temporaries stay within a core's cache."""
 
 
 def butterworth_sos(order: int, cutoff_hz: float, fs: float) -> NDArray[np.float64]:
@@ -102,8 +120,8 @@ def sosfiltfilt(sos: NDArray[np.float64], x: ArrayLike, axis: int = -1) -> NDArr
 
     As ``scipy.signal.sosfiltfilt`` with its defaults: each end is extended by an odd reflection
     of :func:`edge_padding` samples, and each pass starts in the steady state of its first
-    sample, so a constant passes unchanged. Each section is a lower-triangular band system
-    ``A y = B u`` solved by LAPACK (``dtbtrs``) for all signals at once.
+    sample, so a constant passes unchanged. Each pass runs every signal at once, in blocks of
+    samples (module docstring).
 
     Parameters
     ----------
@@ -141,40 +159,76 @@ def sosfiltfilt(sos: NDArray[np.float64], x: ArrayLike, axis: int = -1) -> NDArr
     x = np.moveaxis(x, axis, -1)
     rows = x.reshape(-1, x.shape[-1])
     out = np.empty_like(rows)
-    for start in range(0, len(rows), _BLOCK):  # a block's columns stay in cache through both passes
-        block = rows[start : start + _BLOCK]
+    for start in range(0, len(rows), _ROWS):
+        block = rows[start : start + _ROWS]
         first, last = block[:, :1], block[:, -1:]
         extended = np.concatenate(
             [2 * first - block[:, pad:0:-1], block, 2 * last - block[:, -2 : -pad - 2 : -1]],
             axis=1,
         )
-        columns = _cascade(sos, np.asfortranarray(extended.T))  # time down the columns (LAPACK)
-        columns = _cascade(sos, np.asfortranarray(columns[::-1]))[::-1]
-        out[start : start + _BLOCK] = columns[pad : len(columns) - pad].T
+        forward = _causal(sos, extended)
+        out[start : start + _ROWS] = _causal(sos, forward[:, ::-1])[:, pad + n - 1 : pad - 1 : -1]
     return np.moveaxis(out.reshape(x.shape), -1, axis)
 
 
-def _cascade(sos: NDArray[np.float64], u: NDArray[np.float64]) -> NDArray[np.float64]:
-    """The sections in turn over ``u`` (time along axis 0), each from the steady state of
-    ``u[0]``: before the first sample its input stood at ``u[0]`` and its output at DC gain
-    times that."""
-    from scipy.linalg.lapack import dtbtrs  # here: the designs alone need no SciPy
-
-    level = u[0].copy()
+def _state_space(
+    sos: NDArray[np.float64],
+) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64], float]:
+    """``(A, B, C, D)`` of the cascade: each section in controllable canonical form, fed by
+    the output of the sections before it."""
+    a, b, c, d = np.zeros((0, 0)), np.zeros(0), np.zeros(0), 1.0
     for b0, b1, b2, _, a1, a2 in sos:
-        rhs = b0 * u
-        rhs[1:] += b1 * u[:-1]
-        rhs[2:] += b2 * u[:-2]
-        out_level = level * (b0 + b1 + b2) / (1.0 + a1 + a2)
-        rhs[0] += (b1 + b2) * level - (a1 + a2) * out_level
-        rhs[1] += b2 * level - a2 * out_level
-        band = np.empty((3, len(u)))
-        band[0], band[1], band[2] = 1.0, a1, a2
-        u, info = dtbtrs(band, rhs, uplo="L", diag="U", overwrite_b=True)
-        if info != 0:  # a unit diagonal is never singular: a malformed argument
-            raise RuntimeError(f"LAPACK dtbtrs failed (info = {info})")
-        level = out_level
-    return u
+        m = len(b)
+        grown = np.zeros((m + 2, m + 2))
+        grown[:m, :m] = a
+        grown[m, :m] = c  # the section's input: the output of the sections before it
+        grown[m:, m:] = [[-a1, -a2], [1.0, 0.0]]
+        b = np.concatenate([b, [d, 0.0]])
+        c = np.concatenate([b0 * c, [b1 - b0 * a1, b2 - b0 * a2]])
+        a, d = grown, b0 * d
+    return a, b, c, d
+
+
+def _causal(sos: NDArray[np.float64], u: NDArray[np.float64]) -> NDArray[np.float64]:
+    """The cascade over each row of ``u`` (time along axis 1), from the steady state of the
+    row's first sample: before it, the input stood at that value forever (module docstring)."""
+    rows, m = u.shape
+    span = max(_SPAN, min(m, round(math.sqrt(_STEP_COST / rows))))
+    toeplitz, observe, reach, step, steady = _block_matrices(sos.tobytes(), len(sos), span)
+    blocks = -(-m // span)
+    padded = np.empty((rows, blocks * span))  # the tail past the end only feeds discarded outputs
+    padded[:, :m], padded[:, m:] = u, u[:, -1:]
+    flat = padded.reshape(-1, span)
+    y = (flat @ toeplitz.T).reshape(rows, blocks, span)
+    gained = (flat @ reach).reshape(rows, blocks, -1)
+    initial = np.empty_like(gained)
+    state = u[:, :1] * steady
+    for k in range(blocks):  # a few numbers per signal, from block to block
+        initial[:, k] = state
+        state = state @ step + gained[:, k]
+    y += (initial.reshape(blocks * rows, -1) @ observe.T).reshape(rows, blocks, span)
+    return y.reshape(rows, -1)[:, :m]
+
+
+@functools.lru_cache(maxsize=32)
+def _block_matrices(
+    sos_bytes: bytes, n_sections: int, span: int
+) -> tuple[NDArray[np.float64], ...]:
+    """For blocks of ``span`` samples: the Toeplitz matrix of the impulse response ``[out,
+    in]``, the observability matrix ``(span, n)`` (initial state to outputs), the reachability
+    matrix ``(span, n)`` (each input to the final state), ``A^span`` transposed, and the steady
+    state per unit input."""
+    a, b, c, d = _state_space(np.frombuffer(sos_bytes).reshape(n_sections, 6))
+    observe, reach = [c], [b]  # c A^j, A^j b
+    for _ in range(span - 1):
+        observe.append(observe[-1] @ a)
+        reach.append(a @ reach[-1])
+    impulse = np.array([d, *(row @ b for row in observe[:-1])])
+    lag = np.arange(span)
+    toeplitz = np.where(lag[:, None] >= lag, impulse[lag[:, None] - lag], 0.0)
+    step = np.linalg.matrix_power(a, span).T
+    steady = np.linalg.solve(np.eye(len(b)) - a, b)
+    return toeplitz, np.array(observe), np.array(reach[::-1]), step, steady
 
 
 def _prewarp(frequency_hz: float, fs: float) -> float:

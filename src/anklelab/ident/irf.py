@@ -259,9 +259,7 @@ def _pinv_mdl(
     over outputs) and the number kept minimises ``R(m) * (1 + m ln N / N)``, ``R(m)`` being the
     unexplained normalised variance.
     """
-    from scipy.linalg import eigh
-
-    lam, vec = eigh(phi)
+    lam, vec = np.linalg.eigh(phi)
     usable = lam > lam[-1] * phi.shape[0] * np.finfo(float).eps
     lam, vec = lam[usable], vec[:, usable]
     coord = vec.T @ rhs
