@@ -30,11 +30,14 @@ def dies_in_workers(data: tuple[float, int], name: str) -> Figure:
     return draw(size, name)
 
 
-NAMES = ["one", "two", "three"]
+def marks_its_exit(data: tuple[float, str], name: str) -> Figure:
+    """:func:`draw`, after registering an exit handler that appends to the file ``data[1]``."""
+    size, mark = data
+    atexit.register(lambda: open(mark, "a").write(f"{os.getpid()}\n"))
+    return draw(size, name)
 
-TEARDOWN_MARK = os.environ.get("ANKLELAB_TEST_TEARDOWN_MARK")
-if TEARDOWN_MARK and multiprocessing.parent_process() is not None:  # in a worker: it imports us
-    atexit.register(lambda: open(TEARDOWN_MARK, "a").write(f"{os.getpid()}\n"))
+
+NAMES = ["one", "two", "three"]
 
 
 def test_workers_render_the_same_pngs_as_the_calling_process():
@@ -49,15 +52,19 @@ def test_workers_render_the_same_pngs_as_the_calling_process():
     assert len({hashlib.sha256(png).digest() for png in rendered.values()}) == len(NAMES)
 
 
-def test_the_workers_end_without_tearing_their_interpreter_down(tmp_path, monkeypatch):
-    """A worker's exit handlers (here one the worker registered on import) never run: the
+@pytest.mark.parametrize("method", ["forkserver", "spawn"])
+def test_the_workers_end_without_tearing_their_interpreter_down(tmp_path, monkeypatch, method):
+    """A worker's exit handlers (here one each registers while drawing) never run: the
     interpreter's teardown with matplotlib loaded took 0.3 s that the command waited for."""
+    import anklelab.report.render as render
+
+    if method not in multiprocessing.get_all_start_methods():
+        pytest.skip(f"no {method} here")
+    monkeypatch.setattr(render, "_start_method", lambda: method)
     mark = tmp_path / "teardown"
-    monkeypatch.setenv("ANKLELAB_TEST_TEARDOWN_MARK", str(mark))
-    renderer = FigureRenderer([__name__], processes=2)
-    workers = list(renderer._pool._processes.values())
-    with renderer:
-        assert list(renderer.render(draw, 2.0, NAMES)) == NAMES
+    with FigureRenderer([__name__], processes=2) as renderer:
+        assert list(renderer.render(marks_its_exit, (2.0, str(mark)), NAMES)) == NAMES
+        workers = list(renderer._pool._processes.values())
     assert [worker.exitcode for worker in workers] == [0, 0]
     assert not mark.exists(), mark.read_text()
 
@@ -141,10 +148,12 @@ def test_the_workers_exit_when_the_process_that_started_them_is_killed(tmp_path)
 
     script = tmp_path / "start.py"
     script.write_text(
-        "import os, signal\n"
+        "import os, signal, time\n"
         "from anklelab.report.render import FigureRenderer\n"
         "if __name__ == '__main__':\n"
         "    renderer = FigureRenderer(processes=2)\n"
+        "    while len(renderer._pool._processes) < 2:  # started by a thread\n"
+        "        time.sleep(0.01)\n"
         "    print(' '.join(str(p) for p in renderer._pool._processes), flush=True)\n"
         "    os.kill(os.getpid(), signal.SIGKILL)\n"
     )

@@ -151,25 +151,25 @@ def analyze(
     figures and OUT/run.json (the record of the run: settings, input hashes, files written).
     OUT is written whole or not at all.
     """
-    from anklelab.commands._files import output_directory
-    from anklelab.data import load_session, session_hash
-    from anklelab.errors import AnklelabWarning
-    from anklelab.ident.irf import PlatformFilters
-    from anklelab.pipelines.walking import STEPS, analyze_walking, load_walking_settings
-
     session_input(session_path)
-    settings = load_walking_settings(settings_file, seed=seed)
-    filters = PlatformFilters.load(filters_file) if filters_file else None
-    inputs = [p for p in (session_path, settings_file, filters_file) if p is not None]
-    with (
-        contextlib.ExitStack() as stack,
-        output_directory(out, command="analyze", force=force, inputs=inputs) as run,
-        recording_progress() as task,
-    ):
-        session = load_session(session_path, progress=task(f"reading {session_path.name}"))
-        # started once the session has been read (a bad one is refused at once), the figure
-        # workers import matplotlib during the analysis
+    with contextlib.ExitStack() as stack:
+        # started first, the figure workers import matplotlib while this process imports the
+        # analysis and reads the session (stopped at once if either fails)
         renderer = stack.enter_context(_renderer(figures))
+        from anklelab.commands._files import output_directory
+        from anklelab.data import load_session, session_hash
+        from anklelab.errors import AnklelabWarning
+        from anklelab.ident.irf import PlatformFilters
+        from anklelab.pipelines.walking import STEPS, analyze_walking, load_walking_settings
+
+        settings = load_walking_settings(settings_file, seed=seed)
+        filters = PlatformFilters.load(filters_file) if filters_file else None
+        inputs = [p for p in (session_path, settings_file, filters_file) if p is not None]
+        run = stack.enter_context(
+            output_directory(out, command="analyze", force=force, inputs=inputs)
+        )
+        task = stack.enter_context(recording_progress())
+        session = load_session(session_path, progress=task(f"reading {session_path.name}"))
         step = task("analysing")
         total = len(STEPS) + 1 + figures
         names = list(STEPS)
