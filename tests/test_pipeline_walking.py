@@ -1017,8 +1017,9 @@ def test_no_change_is_asserted_where_the_stiffness_is_poorly_determined():
 
 
 def test_stance_in_blocks_equals_the_stance_in_one(small, monkeypatch):
-    """Trials are filtered in blocks to bound memory; any block size gives the same numbers,
-    with recordings of different lengths (one shorter than the others, one too short)."""
+    """Trials are filtered in blocks to bound memory; any block size gives the same numbers to
+    rounding (the filter's matrix products round by their shapes), with recordings of
+    different lengths (one shorter than the others, one too short)."""
     from anklelab.pipelines.walking import fit_platform_filters, stance
     from anklelab.pipelines.walking.stance import stance_trials
 
@@ -1035,7 +1036,8 @@ def test_stance_in_blocks_equals_the_stance_in_one(small, monkeypatch):
     monkeypatch.setattr(stance, "_BLOCK_BYTES", 3 * row_bytes)  # blocks of 3 trials
     blocked, _ = stance_trials(session, settings, filters)
     assert len(session.walking) > 6
-    assert np.array_equal(blocked.data, whole.data)
+    scale = np.abs(whole.data).max(axis=(0, 2), keepdims=True)
+    assert np.all(np.abs(blocked.data - whole.data) <= 1e-10 * scale)  # the 2nd derivative: 2e-12
     assert blocked.drop_log == whole.drop_log and blocked.drop_log[1]
     for key, value in whole.metadata.items():
         same = blocked.metadata[key] == value

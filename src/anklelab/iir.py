@@ -23,7 +23,6 @@ steady-state initial conditions, the default pad length) to rounding (tests comp
 from __future__ import annotations
 
 import functools
-import math
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -33,11 +32,13 @@ from anklelab.errors import ParameterError
 __all__ = ["butterworth_sos", "edge_padding", "resonance_sos", "sosfiltfilt"]
 
 _SPAN = 16
-"""Samples per block of a pass, at least (the fastest for many signals)."""
-_STEP_COST = 2**15
-"""A step from block to block costs about as much as this many multiply-adds in the block
-products. A pass over ``rows`` signals of ``m`` samples in blocks of ``span`` thus costs about
-``rows m span + _STEP_COST m / span``, least at ``span = sqrt(_STEP_COST / rows)``."""
+"""Samples per block of a pass, at least: fewer make more steps from block to block, more make
+the block's Toeplitz product do more work for the same outputs (16 is the fastest for stance
+signals)."""
+_STEPS = 128
+"""Steps from block to block in a pass, at most: a long signal takes longer blocks (a step costs
+the same for one signal as for hundreds). The blocks depend on the signal's length alone, so
+that a signal is filtered alike whatever it is filtered with."""
 _ROWS = 512
 """Signals filtered together: their temporaries stay within a core's cache."""
 
@@ -193,7 +194,7 @@ def _causal(sos: NDArray[np.float64], u: NDArray[np.float64]) -> NDArray[np.floa
     """The cascade over each row of ``u`` (time along axis 1), from the steady state of the
     row's first sample: before it, the input stood at that value forever (module docstring)."""
     rows, m = u.shape
-    span = max(_SPAN, min(m, round(math.sqrt(_STEP_COST / rows))))
+    span = max(_SPAN, -(-m // _STEPS))
     toeplitz, observe, reach, step, steady = _block_matrices(sos.tobytes(), len(sos), span)
     blocks = -(-m // span)
     padded = np.empty((rows, blocks * span))  # the tail past the end only feeds discarded outputs

