@@ -152,7 +152,7 @@ class FigureRenderer:
         if processes > 1:
             try:
                 forked = _start_method() == "forkserver"
-                context = get_context(_start_method())
+                context = get_context("forkserver" if forked else "spawn")
                 if forked:
                     context.set_forkserver_preload(["__main__", *_MATPLOTLIB, *modules])
                     with _ctrl_c_ignored():  # its workers inherit that
