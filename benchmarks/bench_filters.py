@@ -1,11 +1,11 @@
 """The zero-phase low-pass: ``anklelab.iir`` against ``scipy.signal.sosfiltfilt``.
 
 Two rows, because the trade is between them. Filtering alone, in a warm process, SciPy's C
-loop is faster than our block matrix products (about 1.8x). But a command that filters must first import
-``scipy.signal``, which costs more than the filtering of a whole paper-size session. The second
-row times that: a fresh interpreter that imports what it needs and filters once. The data are
-800 trials x 8 channels x 1400 samples at 1 kHz (paper 000's walking session), filtered at
-20 Hz, order 4.
+loop is faster than our block matrix products (about 1.8x). But a command that filters must
+first import ``scipy.signal``, which costs more than the filtering of a whole paper-size
+session. The second row times that: a fresh interpreter that imports what it needs and filters
+once. The data are 800 trials x 8 channels x 1400 samples at 1 kHz (paper 000's walking
+session), filtered at 20 Hz, order 4.
 """
 
 from __future__ import annotations
