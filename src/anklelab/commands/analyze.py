@@ -151,12 +151,17 @@ def analyze(
     figures and OUT/run.json (the record of the run: settings, input hashes, files written).
     OUT is written whole or not at all.
     """
+    from anklelab.commands._files import output_directory
+
     session_input(session_path)
+    inputs = [p for p in (session_path, settings_file, filters_file) if p is not None]
     with contextlib.ExitStack() as stack:
-        # started first, the figure workers import matplotlib while this process imports the
-        # analysis and reads the session (stopped at once if either fails)
+        run = stack.enter_context(
+            output_directory(out, command="analyze", force=force, inputs=inputs)
+        )
+        # the output checked, the figure workers start: they import matplotlib while this
+        # process imports the analysis and reads the session (and are ended if that fails)
         renderer = stack.enter_context(_renderer(figures))
-        from anklelab.commands._files import output_directory
         from anklelab.data import load_session, session_hash
         from anklelab.errors import AnklelabWarning
         from anklelab.ident.irf import PlatformFilters
@@ -164,10 +169,6 @@ def analyze(
 
         settings = load_walking_settings(settings_file, seed=seed)
         filters = PlatformFilters.load(filters_file) if filters_file else None
-        inputs = [p for p in (session_path, settings_file, filters_file) if p is not None]
-        run = stack.enter_context(
-            output_directory(out, command="analyze", force=force, inputs=inputs)
-        )
         task = stack.enter_context(recording_progress())
         session = load_session(session_path, progress=task(f"reading {session_path.name}"))
         step = task("analysing")
