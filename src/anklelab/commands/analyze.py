@@ -152,22 +152,23 @@ def analyze(
     OUT is written whole or not at all.
     """
     from anklelab.commands._files import output_directory
+    from anklelab.pipelines.walking import load_walking_settings
 
     session_input(session_path)
+    settings = load_walking_settings(settings_file, seed=seed)
     inputs = [p for p in (session_path, settings_file, filters_file) if p is not None]
     with contextlib.ExitStack() as stack:
         run = stack.enter_context(
             output_directory(out, command="analyze", force=force, inputs=inputs)
         )
-        # the output checked, the figure workers start: they import matplotlib while this
+        # the arguments checked, the figure workers start: they import matplotlib while this
         # process imports the analysis and reads the session (and are ended if that fails)
         renderer = stack.enter_context(_renderer(figures))
         from anklelab.data import load_session, session_hash
         from anklelab.errors import AnklelabWarning
         from anklelab.ident.irf import PlatformFilters
-        from anklelab.pipelines.walking import STEPS, analyze_walking, load_walking_settings
+        from anklelab.pipelines.walking import STEPS, analyze_walking
 
-        settings = load_walking_settings(settings_file, seed=seed)
         filters = PlatformFilters.load(filters_file) if filters_file else None
         task = stack.enter_context(recording_progress())
         session = load_session(session_path, progress=task(f"reading {session_path.name}"))
