@@ -23,6 +23,7 @@ steady-state initial conditions, the default pad length) to rounding (tests comp
 from __future__ import annotations
 
 import functools
+from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -212,9 +213,7 @@ def _causal(sos: NDArray[np.float64], u: NDArray[np.float64]) -> NDArray[np.floa
 
 
 @functools.lru_cache(maxsize=32)
-def _block_matrices(
-    sos_bytes: bytes, n_sections: int, span: int
-) -> tuple[NDArray[np.float64], ...]:
+def _block_matrices(sos_bytes: bytes, n_sections: int, span: int) -> tuple[NDArray[Any], ...]:
     """For blocks of ``span`` samples: the Toeplitz matrix of the impulse response ``[out,
     in]``, the observability matrix ``(span, n)`` (initial state to outputs), the reachability
     matrix ``(span, n)`` (each input to the final state), ``A^span`` transposed, and the steady

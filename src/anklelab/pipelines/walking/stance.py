@@ -189,12 +189,12 @@ def stance_trials(
     n_blocks = max(_THREADS, math.ceil(len(walking) * trial_bytes / _BLOCK_BYTES))
     per_block = math.ceil(len(walking) / n_blocks)
 
-    def block(start: int) -> _StanceBlock:
+    def block_from(start: int) -> _StanceBlock:
         trials = slice(start, start + per_block)
         return _stance_block(session, trials, settings, filters, width, n_stance)
 
     with ThreadPoolExecutor(min(_THREADS, os.cpu_count() or 1)) as pool:
-        blocks = list(pool.map(block, range(0, len(walking), per_block)))
+        blocks = list(pool.map(block_from, range(0, len(walking), per_block)))
     block = _StanceBlock(*(np.concatenate(parts) for parts in zip(*blocks, strict=True)))
     found = np.isfinite(block.onset)
     onset = np.where(found, block.onset, block.event)
