@@ -7,14 +7,14 @@ pass (below), so neither needs ``scipy.signal``: importing it costs every comman
 start-up (SciPy 1.17 parses the docstring of each of its functions on import), more than the
 whole analysis of a session's filtering.
 
-A pass runs the cascade as one state-space system over blocks of :data:`_SPAN` samples. Within
-a block, the outputs are the block's inputs times a lower-triangular Toeplitz matrix of the
-impulse response, plus the block's initial state times the observability matrix; the state at
-the block's end is the initial state times ``A^span`` plus the inputs times the reachability
-matrix. Every block of every signal thus goes through three matrix products at once, and only
-the state, a few numbers per signal, steps from block to block. On the 5 300 stance signals of
-a paper-size session this takes 0.26 s where a LAPACK triangular band solve per section took
-0.43 s.
+A pass runs the cascade as one state-space system over blocks of samples (:data:`_SPAN` or
+more, by the signal's length). Within a block, the outputs are the block's inputs times a
+lower-triangular Toeplitz matrix of the impulse response, plus the block's initial state times
+the observability matrix; the state at the block's end is the initial state times ``A^span``
+plus the inputs times the reachability matrix. Every block of every signal thus goes through
+three matrix products at once, and only the state, a few numbers per signal, steps from block
+to block. On 5 334 signals of 1 100 samples (a paper-size session's stance) this takes 0.27 s
+where a LAPACK triangular band solve per section took 0.53 s.
 
 The results equal SciPy's ``butter(..., output="sos")`` and ``sosfiltfilt`` (odd extension,
 steady-state initial conditions, the default pad length) to rounding (tests compare them).
@@ -168,8 +168,8 @@ def sosfiltfilt(sos: NDArray[np.float64], x: ArrayLike, axis: int = -1) -> NDArr
             [2 * first - block[:, pad:0:-1], block, 2 * last - block[:, -2 : -pad - 2 : -1]],
             axis=1,
         )
-        forward = _causal(sos, extended)
-        out[start : start + _ROWS] = _causal(sos, forward[:, ::-1])[:, pad + n - 1 : pad - 1 : -1]
+        backward = _causal(sos, _causal(sos, extended)[:, ::-1])[:, ::-1]
+        out[start : start + _ROWS] = backward[:, pad : pad + n]
     return np.moveaxis(out.reshape(x.shape), -1, axis)
 
 

@@ -151,8 +151,9 @@ class FigureRenderer:
         self._pool: ProcessPoolExecutor | None = None
         if processes > 1:
             try:
-                forked = _start_method() == "forkserver"
-                context = get_context("forkserver" if forked else "spawn")
+                method = _start_method()
+                context = get_context(method)
+                forked = method == "forkserver"
                 if forked:
                     context.set_forkserver_preload(["__main__", *_MATPLOTLIB, *modules])
                     with _ctrl_c_ignored():  # its workers inherit that

@@ -149,7 +149,7 @@ _THREADS = 2
 this many blocks, whatever the machine, so that the results never depend on its cores. On the
 paper-size session two threads over blocks of 8 MiB took the analysis from 1.27 to 1.05 s; on
 3 200 trials the analysis's peak memory stayed where one thread over blocks of 64 MiB left it
-(1.17 GiB; 32 MiB blocks took 1.33 GiB)."""
+(1.12 against 1.13 GiB; 32 MiB blocks took 1.27 GiB)."""
 
 
 def stance_trials(
