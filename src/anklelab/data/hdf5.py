@@ -45,6 +45,7 @@ import hashlib
 import io
 import json
 from collections.abc import Callable, Sequence
+from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 from typing import Any
 
@@ -116,10 +117,13 @@ def _write_layout(group: h5py.Group, columns: tuple[str, ...], recordings: list[
     digest = hashlib.sha256()
     update(digest, columns)
     update_array_header(digest, dataset.dtype, dataset.shape)
-    for j, name in enumerate(columns):
-        row = np.concatenate([np.asarray(r.columns[name], dtype="<f8") for r in recordings])
-        dataset[j] = row
-        digest.update(row)
+    # hashlib lets go of the interpreter while it hashes: one row is hashed while the next is
+    # gathered and written (the one worker keeps the rows in order)
+    with ThreadPoolExecutor(1) as hashing:
+        for j, name in enumerate(columns):
+            row = np.concatenate([np.asarray(r.columns[name], dtype="<f8") for r in recordings])
+            dataset[j] = row
+            hashing.submit(digest.update, row)
     return digest.hexdigest()
 
 

@@ -45,7 +45,9 @@ Ground truth (``Session.truth``, SI units):
 
 from __future__ import annotations
 
+import threading
 from collections.abc import Callable
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import asdict, dataclass
 from typing import Any
 
@@ -79,6 +81,7 @@ from anklelab.sim.drivetrain import (
     EncoderFault,
     FootLoad,
     PlatformRun,
+    default_threads,
     simulate_platform,
 )
 from anklelab.sim.foot import FootModel, NominalStance, bench_law, foot_load, foot_model
@@ -261,17 +264,26 @@ def simulate_perturberator(
         raise ParameterError(f"fault.trial: expected 1 ... {n_walking}, got {fault.trial}")
     total = n_cal + n_walking + n_bench
     done = [0]
+    counting = threading.Lock()
 
     def advance(n: int) -> None:
-        done[0] += n
-        if progress is not None:
-            progress(done[0], total)
+        with counting:
+            done[0] += n
+            if progress is not None:
+                progress(done[0], total)
 
-    calibration = _calibration(setup, n_cal, rng_cal, advance)
-    walking, walk_truth = _walking(
-        setup, model, per_point, unperturbed, rng_walk, advance, time_courses, fault
-    )
-    tests, bench_truth = _bench(setup, rng_bench, advance) if bench else ((), None)
+    # the calibration has its own random stream, so with more than one thread it runs beside
+    # the walking protocol (whose set-up is NumPy on one core) and the session is the same
+    side = (threads or default_threads()) > 1 and n_cal > 0
+    with ThreadPoolExecutor(1) as pool:  # starts no thread unless given the calibration
+        calibrating = pool.submit(_calibration, setup, n_cal, rng_cal, advance) if side else None
+        calibration = () if calibrating else _calibration(setup, n_cal, rng_cal, advance)
+        walking, walk_truth = _walking(
+            setup, model, per_point, unperturbed, rng_walk, advance, time_courses, fault
+        )
+        tests, bench_truth = _bench(setup, rng_bench, advance) if bench else ((), None)
+        if calibrating is not None:
+            calibration = calibrating.result()
     geo = params.geometry
     fp = params.force_plate
     info = SessionInfo(
