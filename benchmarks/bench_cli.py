@@ -15,7 +15,7 @@ import sys
 
 from benchmarks._harness import Result, compare
 
-CLI = "from anklelab.cli import run; run()"
+CLI = "from anklelab.cli import program; program()"  # the console script's entry point
 EAGER = (
     "import numpy, scipy.signal, matplotlib.pyplot, anklelab.pipelines.walking.analysis, "
     "anklelab.data.store; " + CLI

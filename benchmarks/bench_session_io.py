@@ -45,9 +45,11 @@ CLI = (
     "    status = open('/proc/self/status').read()\n"
     "    os.write(2, ('\\nPEAK_KIB ' + re.search(r'VmHWM:\\s+(\\d+)', status)[1]).encode())\n"
     "atexit.register(peak)\n"
-    "from anklelab.cli import run\n"
-    "run()\n"
+    "from anklelab.cli import {entry}\n"
+    "{entry}()\n"
 )
+"""The command as a program (``program``, the console script's entry point; the baseline has only
+``run``), reporting its peak memory from an exit handler."""
 
 
 def _baseline_src(tmp: Path) -> Path | None:
@@ -97,7 +99,10 @@ def _run(argv: list[str], src: Path | None, clean: Path | None = None) -> tuple[
     with tempfile.TemporaryFile() as errors:
         start = time.perf_counter()
         status = subprocess.run(
-            [sys.executable, "-c", CLI, *argv], env=env, stdout=subprocess.DEVNULL, stderr=errors
+            [sys.executable, "-c", CLI.format(entry="run" if src else "program"), *argv],
+            env=env,
+            stdout=subprocess.DEVNULL,
+            stderr=errors,
         ).returncode
         wall = time.perf_counter() - start
         errors.seek(0)

@@ -42,7 +42,8 @@ bench = false
 [analysis]
 bootstrap_reps = 30
 """
-CLI = "from anklelab.cli import run; run()"
+CLI = "from anklelab.cli import program; program()"  # the console script's entry point
+BASELINE_CLI = "from anklelab.cli import run; run()"  # the baseline has no main()
 
 
 def _timed(command: list[str], env: dict[str, str], before=None) -> float:
@@ -95,6 +96,7 @@ def _simulate(tmp: Path, env: dict[str, str]) -> Result | None:
         out.unlink(missing_ok=True)
 
     ours = _repeat(command, env, fresh)
+    command[2] = BASELINE_CLI
     base_env = env | {"PYTHONPATH": str(baseline / "src"),
                       "NUMBA_CACHE_DIR": str(tmp / "numba-baseline")}  # fmt: skip
     theirs = _repeat(command, base_env, fresh)

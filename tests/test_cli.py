@@ -1,5 +1,6 @@
 """The anklelab command: version, help, parameter inspection, error exit codes."""
 
+import os
 import subprocess
 import sys
 
@@ -137,3 +138,31 @@ def test_every_help_page_speaks_to_users():
         assert result.exit_code == 0, (path, result.output)
         for bad in ("DESIGN.md", "<str>", "<bool>", "<int>", "<float>"):
             assert bad not in result.output, (path, bad)
+
+
+ENTRIES = ("run", "program")
+
+
+def test_the_program_ends_at_once_with_its_code_its_output_and_its_exit_handlers(tmp_path):
+    # the console script's program() skips the interpreter's teardown; what it must still do:
+    # the exit code, every line printed (stdout block-buffered into a pipe), the exit handlers
+    marker = tmp_path / "exit-handler-ran"
+    env = {k: v for k, v in os.environ.items() if k != "PYTHONUNBUFFERED"}
+
+    def anklelab(entry, *argv):
+        code = (
+            f"import atexit, pathlib; atexit.register(pathlib.Path({str(marker)!r}).touch)\n"
+            f"from anklelab.cli import {entry}; {entry}()"
+        )
+        proc = subprocess.run(
+            [sys.executable, "-c", code, *argv], capture_output=True, text=True, env=env
+        )
+        assert marker.exists()
+        marker.unlink()
+        return proc
+
+    shown = {entry: anklelab(entry, "platform", "show", "perturberator") for entry in ENTRIES}
+    assert shown["program"].returncode == 0 and shown["program"].stdout == shown["run"].stdout
+    assert "transmission.ratio" in shown["program"].stdout
+    failed = anklelab("program", "import", "somewhere")
+    assert failed.returncode == 2 and "Missing option" in failed.stderr
