@@ -5,6 +5,9 @@ its peak memory, as the best of a few runs, next to the same command of anklelab
 fast path (main at :data:`BASELINE_COMMIT`, extracted with ``git archive`` and run by the same
 interpreter). Each version reads its own HDF5 store: the baseline the one-dataset-per-column
 ``anklelab-h5/1`` file its ``import`` writes, ours the ``anklelab-h5/2`` file ours writes.
+``import`` + ``analyze`` is also timed against the plain reference analysis of the same CSV
+directory (:mod:`benchmarks.plain_reference`: pandas file by file, the per-trial loop of paper
+000's model, no figures), as a whole process.
 
 The session is the twin's paper-size experiment (``simulate_perturberator(seed=0)``: 5
 calibration, 800 walking and 15 bench recordings, truth time courses included). ``--scale 4``
@@ -39,17 +42,18 @@ BASELINE_COMMIT = "806a6be7b435b1d367d28680770a4b2a14c644b6"
 REPEAT = 3
 # the child reports its own peak resident memory (VmHWM: this program's, reset by exec, unlike
 # ru_maxrss, which keeps the parent's size at the fork)
-CLI = (
+PEAK = (
     "import atexit, os, re\n"
     "def peak():\n"
     "    status = open('/proc/self/status').read()\n"
     "    os.write(2, ('\\nPEAK_KIB ' + re.search(r'VmHWM:\\s+(\\d+)', status)[1]).encode())\n"
     "atexit.register(peak)\n"
-    "from anklelab.cli import {entry}\n"
-    "{entry}()\n"
 )
+CLI = PEAK + "from anklelab.cli import {entry}\n{entry}()\n"
 """The command as a program (``program``, the console script's entry point; the baseline has only
 ``run``), reporting its peak memory from an exit handler."""
+PLAIN = PEAK + "import sys\nfrom benchmarks.plain_reference import main\nmain(sys.argv[1])\n"
+"""The plain reference analysis (:mod:`benchmarks.plain_reference`), reporting its peak memory."""
 
 
 def _baseline_src(tmp: Path) -> Path | None:
@@ -87,10 +91,12 @@ def _wait_for_orphans() -> None:
             return
 
 
-def _run(argv: list[str], src: Path | None, clean: Path | None = None) -> tuple[float, ...]:
+def _run(
+    argv: list[str], src: Path | None, clean: Path | None = None, code: str | None = None
+) -> tuple[float, ...]:
     """Wall time (s), CPU time (user + system, s, of the process and everything it started)
     and peak RSS (MiB) of one ``anklelab`` process (``src`` on PYTHONPATH selects the
-    baseline); ``clean`` is removed first."""
+    baseline; ``code``, another program); ``clean`` is removed first."""
     if clean is not None:
         shutil.rmtree(clean, ignore_errors=True)
     _reap_orphans()
@@ -99,7 +105,7 @@ def _run(argv: list[str], src: Path | None, clean: Path | None = None) -> tuple[
     with tempfile.TemporaryFile() as errors:
         start = time.perf_counter()
         status = subprocess.run(
-            [sys.executable, "-c", CLI.format(entry="run" if src else "program"), *argv],
+            [sys.executable, "-c", code or CLI.format(entry="run" if src else "program"), *argv],
             env=env,
             stdout=subprocess.DEVNULL,
             stderr=errors,
@@ -115,9 +121,11 @@ def _run(argv: list[str], src: Path | None, clean: Path | None = None) -> tuple[
     return wall, cpu, int(text.rsplit("PEAK_KIB ", 1)[1]) / 1024
 
 
-def _best(argv: list[str], src: Path | None, clean: Path | None = None) -> tuple[float, ...]:
+def _best(
+    argv: list[str], src: Path | None, clean: Path | None = None, code: str | None = None
+) -> tuple[float, ...]:
     """Best wall time, best CPU time and largest peak memory of :data:`REPEAT` runs."""
-    runs = [_run(argv, src, clean) for _ in range(REPEAT)]
+    runs = [_run(argv, src, clean, code) for _ in range(REPEAT)]
     return tuple(f(r[k] for r in runs) for k, f in enumerate((min, min, max)))
 
 
@@ -193,6 +201,7 @@ def run(scale: int = 1) -> list[Result]:
             rows.setdefault("analyze", {})[v] = _best(
                 ["analyze", str(h5[v]), "--out", str(out)], src, clean=out
             )
+        plain = _best([str(directory)], None, code=PLAIN) if scale == 1 else None
     label = f"{n} walking trials, {data_mib:.0f} MiB of numbers"
     what = f"anklelab at {BASELINE_COMMIT[:7]} (before the fast path)"
     titles = {
@@ -208,6 +217,15 @@ def run(scale: int = 1) -> list[Result]:
             results.append(Result(f"{title}, {kind}, {label}", ours, base, what))
         both = [sum(rows[k][v][index] for k in ("import", "analyze")) for v in ("ours", "baseline")]
         results.append(Result(f"import + analyze of the CSV directory, {kind}", *both, what))
+        if plain is not None:
+            results.append(
+                Result(
+                    f"import + analyze of the CSV directory, {kind}",
+                    both[0],
+                    plain[index],
+                    "plain reference: pandas per file, per-trial loop, no figures",
+                )
+            )
     for key in ("read h5", "read dir", "import", "analyze"):
         ours, base = rows[key]["ours"][2], rows[key]["baseline"][2]
         name = f"peak memory: {titles[key].split(' (')[0]} ({ours / data_mib:.1f}x the data)"

@@ -70,6 +70,17 @@ def _trial(trial, info, settings, filters):
     return np.vstack([kin, torque, dx])[:, hc:], offset
 
 
+PAPER_SETTINGS = {
+    "stiffness_model": "constant",
+    "covariate_adjustment": False,
+    "outlier_mads": 1e9,
+    "interval_reps": 100,
+    "transmission_stiffness_nm_per_rad": 0.0,
+}
+"""Paper 000's model, which the loop below implements: constant stiffness, no covariate
+adjustment, no outlier screen, the motor angle taken as the plate's."""
+
+
 def per_trial_loop(session, settings):
     """The analysis trial by trial and repetition by repetition; stiffness by condition."""
     filters, *_ = fit_platform_filters(session, settings)
@@ -117,13 +128,7 @@ def _session():
 
 def run() -> list[Result]:
     session = _session()
-    settings = WalkingSettings(
-        stiffness_model="constant",
-        covariate_adjustment=False,
-        outlier_mads=1e9,
-        interval_reps=100,
-        transmission_stiffness_nm_per_rad=0.0,
-    )
+    settings = WalkingSettings(**PAPER_SETTINGS)
     ours = analyze_walking(session, settings)
     theirs = per_trial_loop(session, settings)
     for tp in ours.timing_points:
