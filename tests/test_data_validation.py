@@ -1,5 +1,6 @@
 """Every rejected input names the file, the column and the row (DESIGN.md section 4)."""
 
+import re
 import shutil
 
 import numpy as np
@@ -507,6 +508,7 @@ TOML_VALUES = st.recursive(
             ("force_plate", "az0_m"),
             ("force_plate", "anterior_axis"),
             ("force_plate", "type"),
+            ("force_plate", "delay_ms"),
             ("geometry",),
             ("geometry", "heel_to_ankle_m"),
             ("extra",),
@@ -536,4 +538,31 @@ def test_a_plate_type_read_as_an_array_is_named():
     document = info_to_mapping(random_session().info)
     document["force_plate"]["type"] = np.array([107.0, 105.0])
     with pytest.raises(SessionFormatError, match=r"force_plate\.type: expected one of kistler8"):
+        info_from_mapping(document, "session.toml")
+
+
+@pytest.mark.parametrize(
+    ("value", "expected"),
+    [(-0.5, "expected 0 to 50 ms, got -0.5"), (80, "expected 0 to 50 ms, got 80"),
+     ("1 ms", "expected a finite number, got '1 ms'"), (float("nan"), "expected a finite")],
+)  # fmt: skip
+def test_the_plates_recorded_delay_is_read_written_and_checked(tmp_path, value, expected):
+    from dataclasses import replace as dc_replace
+
+    from anklelab.data import load_session, save_session
+    from anklelab.data._checks import info_from_mapping, info_to_mapping
+
+    session = random_session()
+    info = dc_replace(session.info, force_delay_ms=1.25)
+    document = info_to_mapping(info)
+    assert document["force_plate"]["delay_ms"] == 1.25
+    assert info_from_mapping(document, "session.toml") == info
+    assert "delay_ms" not in info_to_mapping(session.info)["force_plate"]  # 0: as before
+    for fmt, name in (("dir", "s"), ("h5", "s.h5")):
+        path = save_session(dc_replace(session, info=info), tmp_path / name, format=fmt)
+        assert load_session(path).info.force_delay_ms == 1.25
+    document["force_plate"]["delay_ms"] = value
+    with pytest.raises(SessionFormatError, match=r"session\.toml: force_plate\.delay_ms: "):
+        info_from_mapping(document, "session.toml")
+    with pytest.raises(SessionFormatError, match=re.escape(expected)):
         info_from_mapping(document, "session.toml")

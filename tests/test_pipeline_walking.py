@@ -972,6 +972,13 @@ def test_a_known_force_delay_is_taken_out_of_damping_and_inertia(mini):
     late = _delayed(mini.session, 2)
     biased = analyze_walking(late, WalkingSettings(**settings)).timing_points
     fixed = analyze_walking(late, WalkingSettings(force_delay_ms=2.0, **settings)).timing_points
+    # the same delay recorded in the session ([force_plate] delay_ms) is taken by default
+    recorded = dataclasses.replace(late, info=dataclasses.replace(late.info, force_delay_ms=2.0))
+    by_default = analyze_walking(recorded, WalkingSettings(**settings)).timing_points
+    overridden = analyze_walking(recorded, WalkingSettings(force_delay_ms=0.0, **settings))
+    for a, b, c in zip(by_default, fixed, overridden.timing_points, strict=True):
+        assert a.stiffness.mean == b.stiffness.mean and a.inertia.mean == b.inertia.mean
+        assert c.stiffness.mean != a.stiffness.mean
 
     def moved(points, name):
         return np.array([getattr(p, name).mean - getattr(c, name).mean

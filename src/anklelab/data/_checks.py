@@ -62,6 +62,8 @@ MAX_STEP_JITTER = 0.5
 """Largest deviation of any single time step from ``1 / sample_rate_hz``, as a fraction of it."""
 
 _GEOMETRY_KEYS = ("ankle_height_m", "heel_to_ankle_m")
+MAX_FORCE_DELAY_MS = 50.0
+"""Largest ``[force_plate] delay_ms`` accepted: an anti-alias filter delays by a few ms at most."""
 SESSION_PLATFORMS = ("perturberator",)
 """Platforms whose sessions hold walking trials (the capstan platform's identification data
 is a directory of its own)."""
@@ -166,6 +168,15 @@ def info_from_mapping(data: Mapping[str, Any], origin: str, prefix: str = "") ->
         raise SessionFormatError(f"{where}subject: expected a string, got {excerpt(subject)}")
     plate = _table(data, "force_plate", origin, prefix)
     plate_type = plate.pop("type", "kistler8")
+    delay_ms = 0.0
+    if "delay_ms" in plate:
+        delay_ms = _number(plate, "delay_ms", f"{where}force_plate.", positive=False)
+        if not 0 <= delay_ms <= MAX_FORCE_DELAY_MS:
+            raise SessionFormatError(
+                f"{where}force_plate.delay_ms: expected 0 to {MAX_FORCE_DELAY_MS:g} ms, got "
+                f"{delay_ms:g}"
+            )
+        del plate["delay_ms"]
     if not isinstance(plate_type, str) or plate_type not in PLATE_TYPES:
         raise SessionFormatError(
             f"{where}force_plate.type: expected one of {', '.join(PLATE_TYPES)}, got "
@@ -219,6 +230,7 @@ def info_from_mapping(data: Mapping[str, Any], origin: str, prefix: str = "") ->
         ankle_height_m=ankle_height,
         heel_to_ankle_m=heel_to_ankle,
         extra=extra,
+        force_delay_ms=delay_ms,
     )
 
 
@@ -234,6 +246,8 @@ def info_to_mapping(info: SessionInfo) -> dict[str, Any]:
     out |= {k: v for k, v in extra.items() if k not in ("force_plate", "geometry")}
     plate = info.force_plate
     out["force_plate"] = {"type": plate.type} | plate.model_dump() | extra.get("force_plate", {})
+    if info.force_delay_ms:  # written only when there is one: older readers keep it as extra
+        out["force_plate"]["delay_ms"] = float(info.force_delay_ms)
     out["geometry"] = {
         "ankle_height_m": float(info.ankle_height_m),
         "heel_to_ankle_m": float(info.heel_to_ankle_m),

@@ -95,6 +95,10 @@ class SessionInfo:
         Anterior distance from the heel-contact COP to the ankle centre, m.
     extra : mapping
         Any other tables or keys of ``session.toml``, kept as read.
+    force_delay_ms : float
+        How much later the plate's channels are recorded than the angles, ms
+        (``[force_plate] delay_ms``, default 0): the group delay of an analog low-pass that only
+        the force channels pass, such as the plate amplifier's anti-alias filter.
     """
 
     platform: str
@@ -104,6 +108,7 @@ class SessionInfo:
     ankle_height_m: float
     heel_to_ankle_m: float
     extra: Mapping[str, Any] = field(default_factory=dict)
+    force_delay_ms: float = 0.0
 
     @property
     def calibration_columns(self) -> tuple[str, ...]:

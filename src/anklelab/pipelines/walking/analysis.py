@@ -76,7 +76,7 @@ def analyze_walking(
             )
         check_calibration_lengths(filters, session.calibration, fs)
         filter_vaf, filter_vaf_by_channel = score_filters(
-            filters, session.calibration, plate, settings.force_delay_samples(fs)
+            filters, session.calibration, plate, settings.force_delay_samples(session.info)
         )
     if filters_ready is not None:
         filters_ready(filters)

@@ -68,7 +68,7 @@ def fit_platform_filters(
     check_calibration_lengths(filters, calibration, fs)
     fit_rec = calibration[fit_index]
     plate = session.info.force_plate
-    lead = settings.force_delay_samples(fs)
+    lead = settings.force_delay_samples(session.info)
     filters.fit(fit_rec["motor_angle"], load_signals(fit_rec, plate, lead), fs=fs)
     held_out = [rec for i, rec in enumerate(calibration) if i != fit_index] or [fit_rec]
     return (filters, *score_filters(filters, held_out, plate, lead))

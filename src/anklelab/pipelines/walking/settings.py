@@ -3,12 +3,15 @@
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Any, Literal
+from typing import TYPE_CHECKING, Any, Literal
 
 import numpy as np
 from pydantic import ConfigDict, Field, model_validator
 
 from anklelab._params import Parameters, load_parameters
+
+if TYPE_CHECKING:
+    from anklelab.data.session import SessionInfo
 
 __all__ = ["WalkingSettings", "load_walking_settings"]
 
@@ -60,12 +63,12 @@ class WalkingSettings(Parameters):
     force_delay_ms
         How much later the plate's channels are recorded than the angles, ms: an amplifier's
         anti-alias low-pass (a 4th-order Butterworth at ``f`` Hz delays by about
-        ``2.61 / (2π f)`` s, 1.04 ms at 400 Hz, as the twin assumes), converter skew. The
+        ``2.61 / (2π f)`` s, 1.04 ms at 400 Hz, as the twin's amplifier), converter skew. The
         plate's signals (calibration and walking) are moved that much earlier before anything
         else. A delay moves all three estimates (2 ms on the hand-made test session: the
-        stiffness by about 1 %, the inertia by 4-11 %); the analysis does not estimate it, so
-        take it from the recording chain's documentation. 0: paper 000's DAQ, which has no
-        filter.
+        stiffness by about 1 %, the inertia by 4-11 %); the analysis does not estimate it.
+        ``None`` (default): the session's own ``[force_plate] delay_ms``, which records the
+        recording chain (0 when it says nothing, as paper 000's DAQ, which has no filter).
     window_ms, sensitivity_windows_ms
         Impedance analysis window after the onset and the alternative windows checked.
     offset_reference_ms
@@ -133,7 +136,7 @@ class WalkingSettings(Parameters):
     filter_method: Literal["pinv", "toeplitz"] = "pinv"
     calibration_fit_trial: int = Field(0, ge=0)
     transmission_stiffness_nm_per_rad: float = Field(41252.96, ge=0)  # 12 N·m/arcmin
-    force_delay_ms: float = Field(0.0, ge=0, le=50)
+    force_delay_ms: float | None = Field(None, ge=0, le=50)
     window_ms: float = Field(100.0, gt=0)
     offset_reference_ms: float | None = Field(None, ge=0)
     sensitivity_windows_ms: tuple[float, ...] = (75.0, 125.0)
@@ -169,9 +172,11 @@ class WalkingSettings(Parameters):
         """The analysis window followed by the sensitivity windows, ms."""
         return (self.window_ms, *(w for w in self.sensitivity_windows_ms if w != self.window_ms))
 
-    def force_delay_samples(self, fs: float) -> float:
-        """``force_delay_ms`` in samples at ``fs`` Hz (a fraction of a sample allowed)."""
-        return self.force_delay_ms * fs / 1000.0
+    def force_delay_samples(self, info: SessionInfo) -> float:
+        """The plate channels' delay in samples of the session ``info`` describes (a fraction
+        of a sample allowed): ``force_delay_ms``, or the session's own when it is ``None``."""
+        delay_ms = info.force_delay_ms if self.force_delay_ms is None else self.force_delay_ms
+        return delay_ms * info.sample_rate_hz / 1000.0
 
     def offset_reference(self) -> float:
         """How long before each onset the offsets are read, ms: ``offset_reference_ms`` if set,

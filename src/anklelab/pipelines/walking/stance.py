@@ -288,7 +288,7 @@ def _stance_block(
     # the plate's signals that are linear in the load (its channels, or for GRF/COP data the
     # sagittal signals); they, the motor and the ankle angle are zeroed over the baseline (the
     # ankle angle is re-zeroed later)
-    load = advance(plate.load_signals(raw[:, 2:]), settings.force_delay_samples(fs))
+    load = advance(plate.load_signals(raw[:, 2:]), settings.force_delay_samples(info))
     signals = np.concatenate([raw[:, :2], load], axis=1)
     del raw, load
     signals -= signals[..., :n_base].mean(axis=-1, keepdims=True)
