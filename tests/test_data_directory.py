@@ -397,3 +397,19 @@ def test_a_tree_array_linked_from_outside_is_refused(session_dir, outside):
     (session_dir / "truth").mkdir()
     os.symlink(outside, session_dir / "truth" / "x.npy")
     rejected(session_dir, r"s/truth/x\.npy: is a link to .*outside the session directory")
+
+
+def test_a_linked_tree_array_folder_is_followed_inside_and_refused_outside(session_dir, tmp_path):
+    (session_dir / "truth" / "inner").mkdir(parents=True)
+    np.save(session_dir / "truth" / "inner" / "x.npy", np.arange(5.0))
+    os.rename(session_dir / "truth" / "inner", session_dir / "arrays")
+    os.symlink("../arrays", session_dir / "truth" / "inner")
+    assert load_session(session_dir).truth["inner"]["x"].tolist() == [0, 1, 2, 3, 4]
+    elsewhere = tmp_path / "elsewhere"
+    os.rename(session_dir / "arrays", elsewhere)
+    os.unlink(session_dir / "truth" / "inner")
+    os.symlink(elsewhere, session_dir / "truth" / "inner")
+    rejected(session_dir, r"s/truth/inner/x\.npy: is a link to .*outside the session directory")
+    os.unlink(session_dir / "truth" / "inner")
+    os.symlink("..", session_dir / "truth" / "loop")
+    rejected(session_dir, r"s/truth/loop/truth: a link leads back to a folder already read")

@@ -31,7 +31,8 @@ A tree's large arrays (the twin's time courses: 3.5 million values in a paper-si
 NumPy ``.npy`` files in a folder named after the tree, one per array, at the path of its keys
 (each key percent-encoded): ``truth/time_courses/ankle_angle_rad.npy`` is
 ``truth["time_courses"]["ankle_angle_rad"]``. As JSON lists they took 1.6 s of the 3.5 s that
-reading such a session took. Every ``.npy`` file in the folder is read (pickled objects never).
+reading such a session took. Every ``.npy`` file in the folder is read (pickled objects never);
+a linked folder inside it is followed, and a file it leads to outside the session is refused.
 """
 
 from __future__ import annotations
@@ -446,8 +447,19 @@ def _plan(reader: SessionReader) -> _Plan:
 
 def _array_files(root: Path, folder: Path) -> list[Path]:
     """The ``.npy`` files below ``folder`` in order of their paths (none if there is no folder);
-    each must be a regular file inside the session."""
-    files = sorted(folder.rglob("*.npy")) if folder.is_dir() else []
+    each must be a regular file inside the session. A linked folder is followed as the walking
+    folder is: its files are then refused if they lie outside the session; a folder reached
+    twice (a link loop) is refused."""
+    if not folder.is_dir():
+        return []
+    files, seen = [], set()
+    for top, _, names in os.walk(folder, followlinks=True):
+        real = os.path.realpath(top)
+        if real in seen:
+            raise SessionFormatError(f"{top}: a link leads back to a folder already read")
+        seen.add(real)
+        files += [Path(top, name) for name in names if name.endswith(".npy")]
+    files.sort()
     for path in files:
         if problem := file_problem(path, root):
             raise SessionFormatError(f"{path}: {problem}")
