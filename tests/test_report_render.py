@@ -179,3 +179,21 @@ def test_the_workers_exit_when_the_process_that_started_them_is_killed(tmp_path)
     for pid in left:
         os.kill(pid, signal.SIGKILL)
     assert not left
+
+
+def test_a_ctrl_c_while_workers_start_reaches_the_command_once_they_have():
+    """The workers must not inherit Ctrl-C, but one pressed while they start is the user's: it
+    is held back, then delivered (it was ignored, and the command ran to its end)."""
+    import signal
+
+    from anklelab.report.render import _ctrl_c_held
+
+    received = []
+    previous = signal.signal(signal.SIGINT, lambda number, frame: received.append(number))
+    try:
+        with _ctrl_c_held():
+            os.kill(os.getpid(), signal.SIGINT)
+            assert received == []
+        assert received == [signal.SIGINT]
+    finally:
+        signal.signal(signal.SIGINT, previous)

@@ -108,11 +108,23 @@ def _usable_cores() -> int:
 
 
 @contextmanager
-def _ctrl_c_ignored() -> Iterator[None]:
-    """Ctrl-C ignored while workers start: they inherit that from their first instant (the
-    initializer would come too late to spare the terminal their tracebacks)."""
+def _ctrl_c_held() -> Iterator[None]:
+    """Ctrl-C held back while workers start: they inherit that from their first instant (the
+    initializer would come too late to spare the terminal their tracebacks).
+
+    The signal is blocked, not ignored, where the platform can block it: one that arrives
+    meanwhile is delivered to the command when the workers have started, not lost (an ignored
+    one was, and the command ran to its end). Elsewhere (Windows) it is ignored.
+    """
     if threading.current_thread() is not threading.main_thread():
         yield
+        return
+    if hasattr(signal, "pthread_sigmask"):
+        previous_mask = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
+        try:
+            yield
+        finally:
+            signal.pthread_sigmask(signal.SIG_SETMASK, previous_mask)
         return
     previous = signal.signal(signal.SIGINT, signal.SIG_IGN)
     try:
@@ -156,7 +168,7 @@ class FigureRenderer:
                 forked = method == "forkserver"
                 if forked:
                     context.set_forkserver_preload(["__main__", *_MATPLOTLIB, *modules])
-                    with _ctrl_c_ignored():  # its workers inherit that
+                    with _ctrl_c_held():  # its workers inherit that
                         forkserver.ensure_running()
                 self._pool = ProcessPoolExecutor(
                     processes,
@@ -167,7 +179,7 @@ class FigureRenderer:
                 if forked:  # starting a worker waits for the server's imports: not the caller
                     threading.Thread(target=self._start, args=(self._pool,), daemon=True).start()
                 else:
-                    with _ctrl_c_ignored():
+                    with _ctrl_c_held():
                         self._start(self._pool)
             except (OSError, NotImplementedError, BrokenProcessPool):
                 self.close()
