@@ -372,22 +372,26 @@ def run() -> None:
 
 
 def program() -> None:
-    """The ``anklelab`` program: :func:`run`, then an immediate end of the process.
+    """The ``anklelab`` program: :func:`run`, then, if the command succeeded, an immediate end of
+    the process.
 
-    A command has closed and renamed into place everything it writes before it returns, so what
-    a normal interpreter exit still does is free memory and unload modules, one object at a
-    time: 0.2 s after a simulation of the paper-size session, about a tenth of the command. So
-    the exit handlers run, the standard streams are flushed, and the process ends there.
-    :func:`run` itself exits normally (tests and benchmarks call it inside Python).
+    A command that succeeded has closed and renamed into place everything it writes, so what a
+    normal interpreter exit still does is free memory and unload modules, one object at a time:
+    0.2 s after a simulation of the paper-size session, about a tenth of the command. So the exit
+    handlers run, the standard streams are flushed, and the process ends there. A failed or
+    interrupted command exits normally: the interpreter then waits for what it is still ending
+    (figure workers being started, whose setup must not outlive this process).
+    :func:`run` itself always exits normally (tests and benchmarks call it inside Python).
     """
     try:
         run()
     except SystemExit as exc:
-        code = exc.code
+        if exc.code not in (0, None):
+            raise
     atexit._run_exitfuncs()
     for stream in (sys.stdout, sys.stderr):
         try:
             stream.flush()
         except (OSError, ValueError):  # a closed pipe or stream: nothing more can be said
             pass
-    os._exit(code if isinstance(code, int) else 0)
+    os._exit(0)
