@@ -1114,3 +1114,23 @@ def test_the_automatic_choice_takes_damping_and_inertia_from_the_linear_model():
         con.damping.mean != lin.damping.mean
         for con, lin in zip(constant.timing_points, linear.timing_points, strict=True)
     )
+
+
+@pytest.mark.parametrize("lag", [0, 4])
+def test_a_delayed_twist_correction_widens_the_damping_by_its_lag(lag):
+    """A coupler of damping c twists behind T / K by c / K: delaying a correction ``a θ`` by
+    ``τ`` adds ``a τ θ'``, so the damping's interval grows by ``a τ``; the correction's own
+    size (``a``) stays in the stiffness's."""
+    from anklelab.pipelines.walking.impedance import _fit, _systematic
+
+    angle, vel, acc = _perturbation(0.05, n=200)
+    t = np.arange(angle.size) / FS
+    torque = K * angle + B * vel + INERTIA * acc
+    full = np.stack([angle, vel, acc, torque, t * angle])[None]
+    fitted = _fit(full, None, "constant", FS)
+    centre = {q: float(np.ravel(getattr(fitted, q))[0]) for q in ("stiffness", "damping", "inertia")}
+    a = 500.0  # N·m/rad: the twist correction's part of the torque response
+    moves = _systematic(full, a * angle, angle.size, "constant", 0, lag, FS, centre, None)
+    assert centre["stiffness"] == pytest.approx(K, rel=1e-6)
+    assert moves["stiffness"] == pytest.approx(a, rel=0.01)
+    assert moves["damping"] == pytest.approx(a * lag / FS, rel=0.05, abs=1e-6)

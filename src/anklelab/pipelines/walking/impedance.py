@@ -10,7 +10,7 @@ unperturbed trials' residual departures too (the nominal stance they were subtra
 itself an average with sampling error). The refitted values' spread over ``interval_reps``
 resamples, scaled by Student's t, gives the random half-width (:func:`_estimate`); what the
 data cannot pin down is added in quadrature (:func:`_systematic`: the timing between angle and
-plate, the window, the coupler's twist correction). Paper 000's spread — the sd over 60 %
+plate, the window, the coupler's twist correction and its damping). Paper 000's spread — the sd over 60 %
 subsets drawn without replacement — is kept beside it as ``sd``, for comparison with the paper;
 it covers random error only and is about 0.8 × the estimate's standard error.
 
@@ -123,13 +123,14 @@ def _systematic(
     n: int,
     model: str,
     shift: int,
+    lag: int,
     fs: float,
     centre: dict[str, float],
     by_window: ImpedanceFit | None,
 ) -> dict[str, float]:
     """How far each all-trial estimate (``centre``) moves under what the data cannot pin down.
 
-    Two independent sources, added in quadrature:
+    Three independent sources, added in quadrature:
 
     - *Timing and window*: the largest move when the torque of the all-trial average ``full``
       (channels :data:`RESPONSE`, shape ``(1, 5, n_times)``) is shifted by ``±shift`` samples
@@ -146,6 +147,10 @@ def _systematic(
       couplers are 0.75-1.3 times as stiff and damped, the error left after it was 0.8 times
       (stiffness) to 1.3-1.8 times (damping) the correction's own size (medians), so its whole
       size counts.
+    - *The coupler's damping*: the move when the twist correction is delayed by ``lag``
+      samples. A coupler of damping ``c`` twists as ``T / (K + c s)``, behind ``T / K`` by up
+      to ``c / K``; no lab knows ``c``, and on a stiff foot the damping estimate is most
+      sensitive to it.
 
     Returns the systematic half-width per quantity (``stiffness``, ``damping``, ``inertia``).
     """
@@ -160,12 +165,17 @@ def _systematic(
     untwisted = full[..., :n].copy()
     untwisted[:, _TORQUE] += twist_torque[:n]
     twist = _fit(untwisted, None, model, fs)
+    delayed = full[..., :n].copy()  # the correction taken `lag` samples later
+    later = np.concatenate([np.full(lag, twist_torque[0]), twist_torque])
+    delayed[:, _TORQUE] += twist_torque[:n] - later[:n]
+    damped = _fit(delayed, None, model, fs)
     moves = {}
     for name, value in centre.items():
         fits = variants if name == "stiffness" or by_window is None else [*variants, by_window]
         moved = [np.ravel(getattr(fit, name)) - value for fit in fits]
         timing = np.abs(np.concatenate([np.zeros(1), *moved])).max()
-        moves[name] = float(np.hypot(timing, np.ravel(getattr(twist, name))[0] - value))
+        coupler = [np.ravel(getattr(fit, name))[0] - value for fit in (twist, damped)]
+        moves[name] = float(np.linalg.norm([timing, *coupler]))
     return moves
 
 
@@ -257,6 +267,7 @@ def estimate_timing_point(
     probability = _beyond(change_estimate, settings.change_threshold, len(trials))
     full = averages[_FULL : _FULL + 1]
     shift = round(settings.timing_uncertainty_ms * fs / 1000.0)
+    lag = round(settings.coupler_lag_ms * fs / 1000.0)
     # the stiffness (and the VAF) from the chosen model; with the automatic choice, damping and
     # inertia from the linear one whichever is chosen: a stiffness that changes within the
     # window, fitted as constant, puts its k' θ into them (module docstring). A model set by
@@ -274,7 +285,7 @@ def estimate_timing_point(
             q: float(getattr(fitted[name], q)[0][_FULL]) for q in _SYSTEMATIC if source[q] == name
         }
         systematic |= _systematic(
-            full, responses.twist_torque, n, name, shift, fs, centre, windows_fit
+            full, responses.twist_torque, n, name, shift, lag, fs, centre, windows_fit
         )
     estimates = {
         q: _estimate(getattr(fitted[name], q)[0], reps, paper, len(trials), systematic.get(q, 0.0))

@@ -101,6 +101,11 @@ class WalkingSettings(Parameters):
         How well the timing between the angle and the plate's channels is known (anti-alias
         filters, converter skew); the estimates' moves when the torque is shifted by this much
         widen the intervals (damping moves by about ``k δ``, inertia by ``b δ``), ms.
+    coupler_lag_ms
+        How far the coupler's own damping ``c`` may delay its twist behind ``T / K`` (``c / K``;
+        ``2 ζ / ω`` for a damping ratio ``ζ`` at the plate's resonance ``ω`` on the coupler),
+        ms; the estimates' moves when the twist correction is delayed by this much widen the
+        intervals. 4 ms is a damping ratio of 0.3 with the resonance down to 25 Hz.
     change_threshold, change_confidence
         The stiffness is reported as changing within the window when the probability that its
         change over the window (a fraction of it) lies beyond ``change_threshold`` on its
@@ -148,6 +153,7 @@ class WalkingSettings(Parameters):
     outlier_mads: float = Field(25.0, gt=3)
     interval_reps: int = Field(200, ge=20, le=20_000)
     timing_uncertainty_ms: float = Field(1.0, ge=0)
+    coupler_lag_ms: float = Field(4.0, ge=0, le=50)
     change_threshold: float = Field(0.2, gt=0)
     change_confidence: float = Field(0.7, ge=0.5, lt=1.0)
     bootstrap_reps: int = Field(100, ge=1, le=20_000)
