@@ -273,21 +273,25 @@ def bootstrap_weights(
 def advance(x: ArrayLike, lead: float) -> NDArray[np.float64]:
     """``x`` moved ``lead`` samples earlier along its last axis: a signal recorded ``lead``
     samples late, realigned (a fraction of a sample by linear interpolation, accurate for
-    signals well below the sample rate; the last value is held at the end).
+    signals well below the sample rate; the last value is held at the end). A negative
+    ``lead`` delays ``x``, holding its first value at the start.
 
     Examples
     --------
     >>> advance([0.0, 1.0, 2.0, 3.0], 1.5).tolist()
     [1.5, 2.5, 3.0, 3.0]
+    >>> advance([0.0, 1.0, 2.0, 3.0], -0.5).tolist()
+    [0.0, 0.5, 1.5, 2.5]
     """
     x = np.asarray(x, dtype=float)
     if lead == 0:
         return x
     whole = int(np.floor(lead))
     last = x.shape[-1] - 1
-    index = np.clip(np.arange(x.shape[-1]) + whole, 0, last)
+    index = np.arange(x.shape[-1]) + whole
     fraction = lead - whole
-    return (1.0 - fraction) * x[..., index] + fraction * x[..., np.minimum(index + 1, last)]
+    before, after = np.clip(index, 0, last), np.clip(index + 1, 0, last)
+    return (1.0 - fraction) * x[..., before] + fraction * x[..., after]
 
 
 def stack_recordings(
