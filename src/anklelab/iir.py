@@ -102,6 +102,20 @@ def resonance_sos(
     return _bilinear_section(wa * wa, 2 * damping_ratio * wa, fs)[None, :]
 
 
+def group_delay_at_dc(sos: NDArray[np.float64]) -> float:
+    """Delay of the second-order sections ``sos`` for slow signals, samples (their group delay
+    at zero frequency: for each section ``Σ k b_k / Σ b_k - Σ k a_k / Σ a_k``).
+
+    Examples
+    --------
+    >>> round(group_delay_at_dc(butterworth_sos(4, 400.0, 8000.0)) / 8.0, 3)  # ms at 8 kHz
+    1.031
+    """
+    k = np.arange(3)
+    b, a = np.asarray(sos, dtype=float)[:, :3], np.asarray(sos, dtype=float)[:, 3:]
+    return float(np.sum((b @ k) / b.sum(axis=1) - (a @ k) / a.sum(axis=1)))
+
+
 def edge_padding(sos: NDArray[np.float64]) -> int:
     """Samples :func:`sosfiltfilt` extends each end by: ``3 (2 n_sections + 1 - first_order)``.
 

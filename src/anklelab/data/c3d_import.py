@@ -76,12 +76,15 @@ class ChannelsTable(Parameters):
 
 
 class PlateTable(Parameters):
-    """``[plate]``: which force platform, how the session stores it, the walking direction."""
+    """``[plate]``: which force platform, how the session stores it, the walking direction, and
+    how much later its channels are recorded than the angles (``delay_ms``, the amplifier's
+    anti-alias filter; ``[force_plate] delay_ms`` of ``session.toml``)."""
 
     number: int = Field(1, ge=1)
     type: Literal["kistler8", "six_axis", "grf_cop"] | None = None
     walking_axis: WalkingAxis
     min_force_n: float = Field(10.0, ge=0)
+    delay_ms: float = Field(0.0, ge=0, le=50)
 
 
 class TrialsFromCsv(Parameters):
@@ -381,6 +384,8 @@ def _import(root: Path, mapping: Path, spec: C3DMapping, workers: int) -> Sessio
     if plate_table is None:
         raise SessionFormatError(f"{root}: no calibration or walking trial to take the plate from")
     plate_table.setdefault("anterior_axis", "+x")
+    if spec.plate.delay_ms:  # as session.toml's [force_plate] delay_ms
+        plate_table["delay_ms"] = spec.plate.delay_ms
     info = session_info(spec.session, rate, plate_table)
     listed = [root / spec.trials.file] if isinstance(spec.trials, TrialsFromCsv) else []
     read = [*listed, *(path for _, path, _ in entries)]

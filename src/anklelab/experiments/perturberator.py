@@ -82,6 +82,7 @@ from anklelab.sim.drivetrain import (
     FootLoad,
     PlatformRun,
     default_threads,
+    force_delay_ms,
     simulate_platform,
 )
 from anklelab.sim.foot import FootModel, NominalStance, bench_law, foot_load, foot_model
@@ -295,6 +296,7 @@ def simulate_perturberator(
         ),
         ankle_height_m=geo.ankle_height_m,
         heel_to_ankle_m=geo.heel_to_ankle_m,
+        force_delay_ms=force_delay_ms(params, art),
     )
     truth: dict[str, Any] = {
         "parameters": params.model_dump(),

@@ -54,7 +54,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from anklelab.errors import ParameterError, SafetyLimitError
-from anklelab.iir import butterworth_sos, resonance_sos
+from anklelab.iir import butterworth_sos, group_delay_at_dc, resonance_sos
 from anklelab.platforms.perturberator import PerturberatorParameters
 from anklelab.sim import _kernels as K
 from anklelab.sim.artefacts import Artefacts
@@ -67,6 +67,7 @@ __all__ = [
     "PlatformRun",
     "default_threads",
     "dynamic_brake_nms_per_rad",
+    "force_delay_ms",
     "kernel_needs_compiling",
     "platform_constants",
     "simulate_platform",
@@ -412,6 +413,17 @@ def _steps_at_rest(
         row = np.where(active.any(axis=1), active.argmax(axis=1), gait.shape[1])
         first = np.minimum(first, np.floor((row - 1) / gait_samples_per_step).astype(np.int64))
     return np.clip(np.minimum(first, due) - 2, 0, None)
+
+
+def force_delay_ms(params: PerturberatorParameters, art: Artefacts) -> float:
+    """How much later the plate's channels are recorded than the angles, ms: the group delay
+    of the amplifier's anti-alias low-pass for slow signals (0 with it switched off), what a
+    lab reads off its amplifier's data sheet and records as ``[force_plate] delay_ms``."""
+    if not art.anti_alias:
+        return 0.0
+    fplate = params.servo.position_loop_rate_hz
+    sos = butterworth_sos(params.daq.anti_alias_order, params.daq.anti_alias_hz, fplate)
+    return 1000.0 * group_delay_at_dc(sos) / fplate
 
 
 def _plate_filters(
