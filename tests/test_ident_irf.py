@@ -229,6 +229,7 @@ def test_platform_filters_save_and_load_round_trip(calibration, tmp_path):
     assert loaded.inputs == ("angle", "velocity", "acceleration") and loaded.n_lags == 50
     assert loaded.channels == CHANNELS and loaded.fs_ == FS
     assert np.array_equal(loaded.predict(angles[1]), filters.predict(angles[1]))
+    assert np.array_equal(loaded.rigid_gains_, filters.rigid_gains_)
     assert json.loads(path.read_text())["calibration_vaf_percent"] == [99.0]
     assert not list(tmp_path.glob(".*tmp"))
 
@@ -262,3 +263,38 @@ def test_platform_filters_file_written_before_per_pathway_lengths_still_loads(ca
         PlatformFilters(n_lags=40).fit(angles[0], forces[0], fs=FS).to_dict()
     )
     assert new.lags == (1, 40) and new.irf_.shape == (8, 2, 40)
+
+
+def test_rigid_gains_reproduce_the_filters_in_band_without_their_memory(calibration):
+    """The memoryless fit of the same calibration predicts what a slow departure of the plate
+    from the motor adds to its forces as the filters do, within 4 % (the drivetrain's 60 Hz
+    mode is folded into its three gains, so they are not the bare gravity and inertia)."""
+    angles, forces = calibration
+    filters = PlatformFilters().fit(angles[0], forces[0], fs=FS)
+    assert filters.rigid_gains_.shape == (8, 3)
+    t = np.arange(2000) / FS
+    departure = 1e-3 * np.sin(2 * np.pi * 3.0 * t)
+    predicted = filters.predict_departure(departure)
+    inner = slice(300, -300)  # the filters start from rest; the derivative fits are one-sided
+    reference = filters.predict(departure)[:, inner]
+    assert np.allclose(predicted[:, inner], reference, atol=0.04 * np.abs(reference).max())
+    combine = np.ones((1, 8))
+    assert np.allclose(filters.predict_departure(departure, combine=combine), predicted.sum(0))
+
+
+def test_a_filter_file_without_rigid_gains_takes_the_filters_summed_gains(calibration, tmp_path):
+    """Files written before the rigid gains: each pathway's low-frequency gain (its weights
+    summed) stands in, with no velocity gain when the filters have no velocity pathway."""
+    angles, forces = calibration
+    filters = PlatformFilters().fit(angles[0], forces[0], fs=FS)
+    old = filters.to_dict()
+    del old["rigid_gains"]
+    gains = PlatformFilters.from_dict(old).rigid_gains_
+    assert np.allclose(gains[:, 0], filters.irf_[:, 0].sum(axis=1), rtol=1e-12)
+    assert np.array_equal(gains[:, 1], np.zeros(8))
+    assert np.allclose(gains[:, 2], filters.irf_[:, 1].sum(axis=1), rtol=1e-12)
+    path = tmp_path / "f.json"
+    for bad in ([[1.0, 2.0]], [[float("nan")] * 3] * 8):
+        path.write_text(json.dumps(filters.to_dict() | {"rigid_gains": bad}))
+        with pytest.raises(ParameterError, match="rigid_gains: expected finite values of shape"):
+            PlatformFilters.load(path)

@@ -941,8 +941,8 @@ def test_a_one_sample_glitch_is_dropped_with_its_reason():
         trial.recording.columns["fz1"] = fz
     result = analyze_walking(session, WalkingSettings(bootstrap_reps=10))
     reasons = {w.trial: r for w, r in zip(session.walking, result.stance.drop_log, strict=True)}
-    assert any("robust sd" in r for r in reasons[perturbed.trial]), reasons[perturbed.trial]
-    assert any("robust sd" in r for r in reasons[unperturbed.trial]), reasons[unperturbed.trial]
+    for trial in (perturbed, unperturbed):  # the outlier screen, or the plate that pulls
+        assert any("a glitch" in r for r in reasons[trial.trial]), reasons[trial.trial]
     assert sum(bool(r) for r in result.stance.drop_log) == 2
     for a, b in zip(result.timing_points, clean.timing_points, strict=True):
         assert abs(a.stiffness.mean / b.stiffness.mean - 1) < 0.05, a.key
@@ -1013,7 +1013,7 @@ def test_no_change_is_asserted_where_the_stiffness_is_poorly_determined():
     degree of freedom has heavy tails) where the stiffness itself is left open: never flagged."""
     from anklelab.experiments import simulate_perturberator
 
-    session = simulate_perturberator(trials_per_point=8, n_unperturbed=16, n_calibration=2, seed=5)
+    session = simulate_perturberator(trials_per_point=5, n_unperturbed=16, n_calibration=2, seed=13)
     result = analyze_walking(session, WalkingSettings(bootstrap_reps=10))
     points = result.timing_points
     assert any(
@@ -1128,9 +1128,31 @@ def test_a_delayed_twist_correction_widens_the_damping_by_its_lag(lag):
     torque = K * angle + B * vel + INERTIA * acc
     full = np.stack([angle, vel, acc, torque, t * angle])[None]
     fitted = _fit(full, None, "constant", FS)
-    centre = {q: float(np.ravel(getattr(fitted, q))[0]) for q in ("stiffness", "damping", "inertia")}
+    quantities = ("stiffness", "damping", "inertia")
+    centre = {q: float(np.ravel(getattr(fitted, q))[0]) for q in quantities}
     a = 500.0  # N·m/rad: the twist correction's part of the torque response
     moves = _systematic(full, a * angle, angle.size, "constant", 0, lag, FS, centre, None)
     assert centre["stiffness"] == pytest.approx(K, rel=1e-6)
     assert moves["stiffness"] == pytest.approx(a, rel=0.01)
     assert moves["damping"] == pytest.approx(a * lag / FS, rel=0.05, abs=1e-6)
+
+
+def test_the_twist_correction_takes_the_top_plates_own_loads_out_of_the_stiffness():
+    """The foot's torque twists the coupler, and the twisted plate's own forces are predicted
+    from its rigid-body gains on the once-low-passed twist. Passed through the filters' low-pass
+    twice, as before, they left +0.8 % in every stiffness of the noise-free twin whose only
+    artefact is the top plate's own loads (its ideal-sensor twin: +0.07 %)."""
+    from anklelab.experiments import simulate_perturberator
+    from anklelab.sim.artefacts import Artefacts
+
+    ideal = Artefacts.coerce(False)
+    settings = WalkingSettings(stiffness_model="linear", bootstrap_reps=10, interval_reps=40)
+    estimates = []
+    for artefacts in (ideal, dataclasses.replace(ideal, plate_inertia=True)):
+        session = simulate_perturberator(
+            trials_per_point=20, n_unperturbed=40, n_calibration=2, bench=False,
+            artefacts=artefacts, seed=0,
+        )  # fmt: skip
+        points = analyze_walking(session, settings).timing_points
+        estimates.append(np.array([tp.stiffness.mean for tp in points]))
+    assert np.mean(estimates[1] / estimates[0] - 1) == pytest.approx(0.0, abs=0.005)

@@ -326,6 +326,13 @@ class PlatformFilters(Estimator):
         Sample rate the filters were fitted at, Hz.
     order_ : int
         Pseudo-inverse terms kept.
+    rigid_gains_ : ndarray, shape (n_channels, 3)
+        The same calibration fitted without memory: N per rad, per rad/s and per rad/s² of the
+        low-passed angle and its two derivatives (least squares; the drivetrain's resonance is
+        folded into them, so they are not the bare gravity and inertia). In the band the
+        calibration excites they predict as the filters do; beyond it they grow as a rigid
+        plate's forces do, where the filters, known only in that band, amplified a coupler
+        twist with content near the cut-off (VAF −210 %). :meth:`predict_departure` uses them.
     """
 
     _parameter_constraints: ClassVar = {
@@ -395,10 +402,20 @@ class PlatformFilters(Estimator):
             ``self``, fitted.
         """
         forces = self._check_forces(forces)
+        filtered = self._filtered(forces, fs)
         est = ImpulseResponse(n_lags=self.lags, method=self.method)
-        est.fit(self.input_signals(motor_angle, fs), self._filtered(forces, fs))
+        est.fit(self.input_signals(motor_angle, fs), filtered)
         self.irf_, self.order_, self.fs_ = est.irf_, est.order_, float(fs)
+        angle = lowpass(motor_angle, fs, self.cutoff_hz, order=self.filter_order)
+        kinematics = np.moveaxis(self._kinematics(angle, fs), -2, 0).reshape(len(INPUTS), -1)
+        outputs = np.moveaxis(filtered, -2, 0).reshape(len(self.channels), -1)
+        self.rigid_gains_ = np.linalg.lstsq(kinematics.T, outputs.T, rcond=None)[0].T
         return self
+
+    def _kinematics(self, angle: NDArray[np.float64], fs: float) -> NDArray[np.float64]:
+        """A low-passed angle and its two derivatives, shape ``(..., 3, n_times)``."""
+        window = self.derivative_window
+        return np.stack([angle, *(derivative(angle, fs, window, deriv=d) for d in (1, 2))], axis=-2)
 
     def _check_forces(self, forces: ArrayLike) -> NDArray[np.float64]:
         forces = _as_batch(forces, "forces")
@@ -435,6 +452,31 @@ class PlatformFilters(Estimator):
         if combine is not None:
             irf = np.einsum("mc,cil->mil", np.asarray(combine, dtype=float), irf)
         return _filter(self.input_signals(motor_angle, self.fs_), irf)
+
+    def predict_departure(
+        self, departure: ArrayLike, *, combine: ArrayLike | None = None
+    ) -> NDArray[np.float64]:
+        """The plate's own forces for a small ``departure`` of its angle from the motor's, N.
+
+        Parameters
+        ----------
+        departure : array_like, shape (..., n_times)
+            The plate's angle minus the motor's, rad, already low-passed at ``cutoff_hz``
+            (it is not filtered again).
+        combine : array_like, shape (n_combinations, n_channels), optional
+            As in :meth:`predict`.
+
+        Returns
+        -------
+        ndarray, shape (..., n_channels or n_combinations, n_times)
+            From :attr:`rigid_gains_`.
+        """
+        self._check_fitted()
+        gains = self.rigid_gains_
+        if combine is not None:
+            gains = np.asarray(combine, dtype=float) @ gains
+        kinematics = self._kinematics(np.asarray(departure, dtype=float), self.fs_)
+        return np.einsum("ok,...kt->...ot", gains, kinematics)
 
     def vaf(
         self, motor_angle: ArrayLike, forces: ArrayLike
@@ -479,6 +521,7 @@ class PlatformFilters(Estimator):
             "derivative_window": int(self.derivative_window),
             "order": int(self.order_),
             "irf": self.irf_.tolist(),
+            "rigid_gains": self.rigid_gains_.tolist(),
             **extra,
         }
 
@@ -520,6 +563,7 @@ class PlatformFilters(Estimator):
                 f"(channels, inputs, longest filter), got {irf.shape}"
             )
         filters.irf_, filters.fs_, filters.order_ = irf, fs, order
+        filters.rigid_gains_ = _rigid_gains(data, filters, origin)
         return filters
 
     @classmethod
@@ -527,6 +571,29 @@ class PlatformFilters(Estimator):
         """Read filters written by :meth:`save`."""
         data = read_parameter_document(path, "json", what="filter file")
         return cls.from_dict(data, origin=str(path))
+
+
+def _rigid_gains(
+    data: Mapping[str, Any], filters: PlatformFilters, origin: str
+) -> NDArray[np.float64]:
+    """The rigid-plate gains of a filter file; a file written before them had none, and its
+    filters' gains summed over their lags (each pathway's low-frequency gain) stand in."""
+    if "rigid_gains" not in data:
+        summed = filters.irf_.sum(axis=-1)
+        gains = np.zeros((len(filters.channels), len(INPUTS)))
+        gains[:, [INPUTS.index(name) for name in filters.inputs]] = summed
+        return gains
+    try:
+        gains = np.asarray(data["rigid_gains"], dtype=float)
+    except (TypeError, ValueError) as exc:
+        raise ParameterError(f"{origin}: rigid_gains: malformed value: {exc}") from None
+    expected = (len(filters.channels), len(INPUTS))
+    if gains.shape != expected or not np.all(np.isfinite(gains)):
+        raise ParameterError(
+            f"{origin}: rigid_gains: expected finite values of shape {expected} "
+            f"(channels; angle, velocity, acceleration), got {gains.shape}"
+        )
+    return gains
 
 
 def _check_scalars(data: Mapping[str, Any], origin: str) -> None:

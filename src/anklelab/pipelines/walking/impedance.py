@@ -10,9 +10,9 @@ unperturbed trials' residual departures too (the nominal stance they were subtra
 itself an average with sampling error). The refitted values' spread over ``interval_reps``
 resamples, scaled by Student's t, gives the random half-width (:func:`_estimate`); what the
 data cannot pin down is added in quadrature (:func:`_systematic`: the timing between angle and
-plate, the window, the coupler's twist correction and its damping). Paper 000's spread — the sd over 60 %
-subsets drawn without replacement — is kept beside it as ``sd``, for comparison with the paper;
-it covers random error only and is about 0.8 × the estimate's standard error.
+plate, the window, the coupler's twist correction and its damping). Paper 000's spread — the sd
+over 60 % subsets drawn without replacement — is kept beside it as ``sd``, for comparison with
+the paper; it covers random error only and is about 0.8 × the estimate's standard error.
 
 **Which stiffness model** (``stiffness_model = "auto"``): the one with the smaller estimated
 mean squared error of the headline stiffness (a focused information criterion, Claeskens &
@@ -55,7 +55,7 @@ from anklelab.pipelines.walking.responses import RESPONSE, Responses
 from anklelab.pipelines.walking.results import Estimate, TimingPoint, sd
 from anklelab.pipelines.walking.settings import WalkingSettings
 from anklelab.pipelines.walking.stance import samples
-from anklelab.signals import Trials, bootstrap_weights
+from anklelab.signals import Trials, advance, bootstrap_weights
 
 __all__ = ["DIRECTIONS", "condition_order", "estimate_timing_point"]
 
@@ -123,7 +123,7 @@ def _systematic(
     n: int,
     model: str,
     shift: int,
-    lag: int,
+    lag: float,
     fs: float,
     centre: dict[str, float],
     by_window: ImpedanceFit | None,
@@ -147,10 +147,10 @@ def _systematic(
       couplers are 0.75-1.3 times as stiff and damped, the error left after it was 0.8 times
       (stiffness) to 1.3-1.8 times (damping) the correction's own size (medians), so its whole
       size counts.
-    - *The coupler's damping*: the move when the twist correction is delayed by ``lag``
-      samples. A coupler of damping ``c`` twists as ``T / (K + c s)``, behind ``T / K`` by up
-      to ``c / K``; no lab knows ``c``, and on a stiff foot the damping estimate is most
-      sensitive to it.
+    - *The coupler's damping*: the larger move when the twist correction is taken ``lag``
+      samples earlier or later. A coupler of damping ``c`` twists as ``T / (K + c s)``, behind
+      ``T / K`` by ``c / K``, which the correction takes as ``coupler_lag_ms``; no lab knows
+      ``c``, and on a stiff foot the damping estimate is most sensitive to it.
 
     Returns the systematic half-width per quantity (``stiffness``, ``damping``, ``inertia``).
     """
@@ -165,17 +165,19 @@ def _systematic(
     untwisted = full[..., :n].copy()
     untwisted[:, _TORQUE] += twist_torque[:n]
     twist = _fit(untwisted, None, model, fs)
-    delayed = full[..., :n].copy()  # the correction taken `lag` samples later
-    later = np.concatenate([np.full(lag, twist_torque[0]), twist_torque])
-    delayed[:, _TORQUE] += twist_torque[:n] - later[:n]
-    damped = _fit(delayed, None, model, fs)
+    lagged = []  # the correction taken `lag` samples earlier and later
+    for lead in (lag, -lag):
+        moved_twist = full[..., :n].copy()
+        moved_twist[:, _TORQUE] += (twist_torque - advance(twist_torque, lead))[:n]
+        lagged.append(_fit(moved_twist, None, model, fs))
     moves = {}
     for name, value in centre.items():
         fits = variants if name == "stiffness" or by_window is None else [*variants, by_window]
         moved = [np.ravel(getattr(fit, name)) - value for fit in fits]
         timing = np.abs(np.concatenate([np.zeros(1), *moved])).max()
-        coupler = [np.ravel(getattr(fit, name))[0] - value for fit in (twist, damped)]
-        moves[name] = float(np.linalg.norm([timing, *coupler]))
+        damping = max(abs(np.ravel(getattr(fit, name))[0] - value) for fit in lagged)
+        stiffness = np.ravel(getattr(twist, name))[0] - value
+        moves[name] = float(np.linalg.norm([timing, stiffness, damping]))
     return moves
 
 
@@ -267,7 +269,7 @@ def estimate_timing_point(
     probability = _beyond(change_estimate, settings.change_threshold, len(trials))
     full = averages[_FULL : _FULL + 1]
     shift = round(settings.timing_uncertainty_ms * fs / 1000.0)
-    lag = round(settings.coupler_lag_ms * fs / 1000.0)
+    lag = settings.coupler_lag_ms * fs / 1000.0
     # the stiffness (and the VAF) from the chosen model; with the automatic choice, damping and
     # inertia from the linear one whichever is chosen: a stiffness that changes within the
     # window, fitted as constant, puts its k' θ into them (module docstring). A model set by

@@ -55,11 +55,12 @@ class WalkingSettings(Parameters):
         Torsional stiffness between the motor's angle sensor and the plate (gearbox and coupler
         in series), N·m/rad; paper 000: 12 N·m/arcmin. The platform filters, fitted with nobody
         on the plate, predict the plate's own forces from the motor angle; under the foot's
-        torque ``T`` the plate lags the motor by the coupler's twist ``T / K``, so the filters
-        are fed the motor angle minus that twist (see :func:`~.stance.stance_trials`). The
-        correction's whole move of each estimate counts in its 95 % interval (it is
-        quasi-static and assumes this stiffness). 0: the motor angle is taken as the plate's
-        angle, as in paper 000 (no correction, nothing added to the intervals).
+        torque ``T`` the plate lags the motor by the coupler's twist ``T / K``, whose own forces
+        (the filters' memoryless gains, :meth:`~anklelab.ident.PlatformFilters.predict_departure`)
+        are taken off as well (see :func:`~.stance.stance_trials`). The correction's whole move
+        of each estimate counts in its 95 % interval (it assumes this stiffness). 0: the motor
+        angle is taken as the plate's angle, as in paper 000 (no correction, nothing added to
+        the intervals).
     force_delay_ms
         How much later the plate's channels are recorded than the angles, ms: an amplifier's
         anti-alias low-pass (a 4th-order Butterworth at ``f`` Hz delays by about
@@ -102,10 +103,11 @@ class WalkingSettings(Parameters):
         filters, converter skew); the estimates' moves when the torque is shifted by this much
         widen the intervals (damping moves by about ``k δ``, inertia by ``b δ``), ms.
     coupler_lag_ms
-        How far the coupler's own damping ``c`` may delay its twist behind ``T / K`` (``c / K``;
+        How far the coupler's own damping ``c`` delays its twist behind ``T / K`` (``c / K``;
         ``2 ζ / ω`` for a damping ratio ``ζ`` at the plate's resonance ``ω`` on the coupler),
-        ms; the estimates' moves when the twist correction is delayed by this much widen the
-        intervals. 4 ms is a damping ratio of 0.3 with the resonance down to 25 Hz.
+        ms. The twist correction is delayed by this much, and the estimates' moves when it is
+        taken this much earlier or later widen the intervals. 2 ms is a damping ratio of 0.15
+        with the resonance at 25 Hz, or 0.3 at 50 Hz.
     change_threshold, change_confidence
         The stiffness is reported as changing within the window when the probability that its
         change over the window (a fraction of it) lies beyond ``change_threshold`` on its
@@ -153,7 +155,7 @@ class WalkingSettings(Parameters):
     outlier_mads: float = Field(25.0, gt=3)
     interval_reps: int = Field(200, ge=20, le=20_000)
     timing_uncertainty_ms: float = Field(1.0, ge=0)
-    coupler_lag_ms: float = Field(4.0, ge=0, le=50)
+    coupler_lag_ms: float = Field(2.0, ge=0, le=50)
     change_threshold: float = Field(0.2, gt=0)
     change_confidence: float = Field(0.7, ge=0.5, lt=1.0)
     bootstrap_reps: int = Field(100, ge=1, le=20_000)

@@ -249,6 +249,21 @@ def stance_trials(
         lengths=lengths - block.event,
         drop_log=log,
     )
+    # a plate cannot pull: a low-passed vertical force far below zero is a corrupted channel (a
+    # one-sample glitch rings through the low-pass), whether or not a sample lands near zero
+    lowest = np.nanmin(stance.data[:, STANCE_CHANNELS.index("grf_z")], axis=-1, initial=np.inf)
+    pulling = lowest < -settings.heel_contact_threshold_n
+    if pulling.any():
+        stance = stance.drop(
+            pulling,
+            [
+                "the low-passed vertical force falls far below zero within the analysed stance: "
+                f"a plate cannot pull (a glitch in a force channel?) [trial {trial}: {force:.0f} N]"
+                for trial, force in zip(
+                    stance.metadata["trial"][pulling], lowest[pulling], strict=True
+                )
+            ],
+        )
     undefined = ~np.isfinite(stance.data).all(axis=(1, 2))
     if undefined.any():
         stance = stance.drop(
@@ -317,12 +332,10 @@ def _stance_block(
     cop_defined = np.isfinite(cop0)
     load_lp = lowpass(load_raw, **lp)
 
-    def foot_load(plate_angle: NDArray[np.float64]) -> tuple[NDArray[np.float64], ...]:
-        """The foot's GRF, torque and lever arm: the low-passed load minus the plate's own
-        forces predicted for ``plate_angle``."""
-        grf_x, grf_z, moment = np.moveaxis(
-            load_lp - filters.predict(plate_angle, combine=sagittal), 1, 0
-        )
+    def foot_load(own: NDArray[np.float64]) -> tuple[NDArray[np.float64], ...]:
+        """The foot's GRF, torque and lever arm: the low-passed load minus the plate's ``own``
+        forces."""
+        grf_x, grf_z, moment = np.moveaxis(load_lp - own, 1, 0)
         cop_x = cop_from_moment(moment, grf_z)
         cop_x[rows, event] = np.where(cop_defined, cop0, 0.0)  # ankle_torque zeroes it here
         torque, dx = ankle_torque(
@@ -333,15 +346,15 @@ def _stance_block(
         )
         return grf_z, torque, dx
 
-    grf_z, torque, dx = foot_load(motor)
+    own = filters.predict(motor, combine=sagittal)
+    grf_z, torque, dx = foot_load(own)
     untwisted = torque
     if stiffness := settings.transmission_stiffness_nm_per_rad:
         # the foot's torque twists the coupler: the plate's own forces follow the plate, which
-        # lags the motor by T/K (the hinge is on the ankle's axis, so T is the load about it).
-        # T passes the filters' low-pass once more: the filters are known only in the band the
-        # calibration excites, and T's content near the cut-off, fed to them unfiltered,
-        # wrecked sessions with a stiff foot (walking-analysis guide)
-        grf_z, torque, dx = foot_load(motor - np.nan_to_num(torque) / stiffness)
+        # departs from the motor by -T/(K + c s), T/K delayed by up to the coupler's lag c/K (the
+        # hinge is on the ankle's axis, so T is the load about it); T is low-passed already
+        twist = advance(np.nan_to_num(torque) / stiffness, -settings.coupler_lag_ms * fs / 1000.0)
+        grf_z, torque, dx = foot_load(own + filters.predict_departure(-twist, combine=sagittal))
     ankle = lowpass(ankle_raw, **lp)
     ankle_at_contact = ankle[rows, event][:, None]
     kin = kinematics(ankle - ankle_at_contact, fs, settings.derivative_window)
