@@ -409,7 +409,8 @@ class PlatformFilters(Estimator):
         angle = lowpass(motor_angle, fs, self.cutoff_hz, order=self.filter_order)
         kinematics = np.moveaxis(self._kinematics(angle, fs), -2, 0).reshape(len(INPUTS), -1)
         outputs = np.moveaxis(filtered, -2, 0).reshape(len(self.channels), -1)
-        self.rigid_gains_ = np.linalg.lstsq(kinematics.T, outputs.T, rcond=None)[0].T
+        gains = np.linalg.lstsq(kinematics.T, outputs.T, rcond=None)[0]
+        self.rigid_gains_: NDArray[np.float64] = np.ascontiguousarray(gains.T, dtype=np.float64)
         return self
 
     def _kinematics(self, angle: NDArray[np.float64], fs: float) -> NDArray[np.float64]:
@@ -448,9 +449,7 @@ class PlatformFilters(Estimator):
         ndarray, shape (..., n_channels or n_combinations, n_times)
         """
         self._check_fitted()
-        irf = self.irf_
-        if combine is not None:
-            irf = np.einsum("mc,cil->mil", np.asarray(combine, dtype=float), irf)
+        irf = _combined(self.irf_, combine)
         return _filter(self.input_signals(motor_angle, self.fs_), irf)
 
     def predict_departure(
@@ -472,9 +471,7 @@ class PlatformFilters(Estimator):
             From :attr:`rigid_gains_`.
         """
         self._check_fitted()
-        gains = self.rigid_gains_
-        if combine is not None:
-            gains = np.asarray(combine, dtype=float) @ gains
+        gains = _combined(self.rigid_gains_, combine)
         kinematics = self._kinematics(np.asarray(departure, dtype=float), self.fs_)
         return np.einsum("ok,...kt->...ot", gains, kinematics)
 
@@ -571,6 +568,14 @@ class PlatformFilters(Estimator):
         """Read filters written by :meth:`save`."""
         data = read_parameter_document(path, "json", what="filter file")
         return cls.from_dict(data, origin=str(path))
+
+
+def _combined(weights: NDArray[np.float64], combine: ArrayLike | None) -> NDArray[np.float64]:
+    """Per-channel ``weights`` (channels first), or their linear combinations ``combine``
+    (shape ``(n_combinations, n_channels)``)."""
+    if combine is None:
+        return weights
+    return np.einsum("mc,c...->m...", np.asarray(combine, dtype=float), weights)
 
 
 def _rigid_gains(

@@ -166,9 +166,9 @@ def _systematic(
     untwisted[:, _TORQUE] += twist_torque[:n]
     twist = _fit(untwisted, None, model, fs)
     lagged = []  # the correction taken `lag` samples earlier and later
-    for lead in (lag, -lag):
+    for early in (lag, -lag):
         moved_twist = full[..., :n].copy()
-        moved_twist[:, _TORQUE] += (twist_torque - advance(twist_torque, lead))[:n]
+        moved_twist[:, _TORQUE] += (twist_torque - advance(twist_torque, early))[:n]
         lagged.append(_fit(moved_twist, None, model, fs))
     moves = {}
     for name, value in centre.items():
