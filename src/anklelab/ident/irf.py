@@ -581,8 +581,8 @@ def _combined(weights: NDArray[np.float64], combine: ArrayLike | None) -> NDArra
 def _rigid_gains(
     data: Mapping[str, Any], filters: PlatformFilters, origin: str
 ) -> NDArray[np.float64]:
-    """The rigid-plate gains of a filter file; a file written before them had none, and its
-    filters' gains summed over their lags (each pathway's low-frequency gain) stand in."""
+    """The memoryless gains of a filter file; a file written before them had none, and its
+    filters' weights summed over their lags (each pathway's low-frequency gain) stand in."""
     if "rigid_gains" not in data:
         summed = filters.irf_.sum(axis=-1)
         gains = np.zeros((len(filters.channels), len(INPUTS)))

@@ -175,9 +175,9 @@ def _systematic(
         fits = variants if name == "stiffness" or by_window is None else [*variants, by_window]
         moved = [np.ravel(getattr(fit, name)) - value for fit in fits]
         timing = np.abs(np.concatenate([np.zeros(1), *moved])).max()
-        damping = max(abs(np.ravel(getattr(fit, name))[0] - value) for fit in lagged)
-        stiffness = np.ravel(getattr(twist, name))[0] - value
-        moves[name] = float(np.linalg.norm([timing, stiffness, damping]))
+        twist_size = np.ravel(getattr(twist, name))[0] - value
+        twist_lag = max(abs(np.ravel(getattr(fit, name))[0] - value) for fit in lagged)
+        moves[name] = float(np.linalg.norm([timing, twist_size, twist_lag]))
     return moves
 
 
