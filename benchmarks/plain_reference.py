@@ -24,7 +24,8 @@ def read_directory(root: Path):
     from anklelab.forceplate import PlateGeometry
 
     meta = tomllib.loads((root / "session.toml").read_text(encoding="utf-8"))
-    plate = {k: v for k, v in meta["force_plate"].items() if k != "type"}
+    # the paper's method takes the plate's channels as recorded (no delay_ms)
+    plate = {k: v for k, v in meta["force_plate"].items() if k not in ("type", "delay_ms")}
 
     def recording(path: Path) -> Recording:
         frame = pd.read_csv(path)
