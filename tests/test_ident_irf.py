@@ -293,6 +293,11 @@ def test_a_filter_file_without_rigid_gains_takes_the_filters_summed_gains(calibr
     assert np.allclose(gains[:, 0], filters.irf_[:, 0].sum(axis=1), rtol=1e-12)
     assert np.array_equal(gains[:, 1], np.zeros(8))
     assert np.allclose(gains[:, 2], filters.irf_[:, 1].sum(axis=1), rtol=1e-12)
+    # they predict a slow departure as the fitted gains do, within 5 % of its largest force
+    departure = 1e-3 * np.sin(2 * np.pi * 3.0 * np.arange(2000) / FS)
+    fitted = filters.predict_departure(departure)[:, 300:-300]
+    standing_in = PlatformFilters.from_dict(old).predict_departure(departure)[:, 300:-300]
+    assert np.allclose(standing_in, fitted, atol=0.05 * np.abs(fitted).max())
     path = tmp_path / "f.json"
     for bad in ([[1.0, 2.0]], [[float("nan")] * 3] * 8):
         path.write_text(json.dumps(filters.to_dict() | {"rigid_gains": bad}))

@@ -10,8 +10,9 @@ perturbation: they train the adjustment, and their residuals carry the nominal's
 error into the intervals.
 
 A trial whose response departs from the others' median by more than ``outlier_mads`` robust
-standard deviations at any sample (a one-sample glitch of 1e6 N in one channel, a trial from
-another experiment) would dominate the ensemble; it is dropped with a reason naming the trial.
+standard deviations at any sample (a glitch in one channel, a trial from another experiment)
+would dominate the ensemble; it is dropped with a reason naming the trial. (A one-sample glitch
+of 1e6 N is dropped earlier, by the stance: its vertical force rings far below zero.)
 """
 
 from __future__ import annotations
