@@ -48,6 +48,8 @@ __all__ = ["FigureRenderer", "PendingFigures"]
 T = TypeVar("T")
 
 _MATPLOTLIB = ("matplotlib.figure", "matplotlib.backends.backend_agg")
+_STARTUP_S = 10.0
+"""The longest wait for a figure worker to start or end when a command is abandoned, s."""
 _MAX_PROCESSES = 4
 """More workers than this would only add start-up work: a command draws at most a few figures."""
 
@@ -161,6 +163,7 @@ class FigureRenderer:
             processes = 1  # never workers of workers
         self.processes = processes
         self._pool: ProcessPoolExecutor | None = None
+        self._starter: threading.Thread | None = None
         if processes > 1:
             try:
                 method = _start_method()
@@ -177,7 +180,10 @@ class FigureRenderer:
                     initargs=(tuple(modules),),
                 )
                 if forked:  # starting a worker waits for the server's imports: not the caller
-                    threading.Thread(target=self._start, args=(self._pool,), daemon=True).start()
+                    self._starter = threading.Thread(
+                        target=self._start, args=(self._pool,), daemon=True
+                    )
+                    self._starter.start()
                 else:
                     with _ctrl_c_held():
                         self._start(self._pool)
@@ -231,12 +237,19 @@ class FigureRenderer:
         if pool is None:
             return
         if abandon:
-            # waits only for a worker being started (its server's imports: a second at most);
-            # one killed before it has been sent its setup would print a traceback
+            # waits only for the workers being started (their server's imports: a second at
+            # most), then ends them all and waits for them: one still starting when this
+            # process ended would find its setup's semaphore gone and print a traceback after
+            # the command's last line
             pool.shutdown(wait=False, cancel_futures=True)
+            if self._starter is not None:
+                self._starter.join(timeout=_STARTUP_S)
             # no public way before Python 3.14's terminate_workers()
-            for process in list((getattr(pool, "_processes", None) or {}).values()):
+            processes = list((getattr(pool, "_processes", None) or {}).values())
+            for process in processes:
                 process.terminate()
+            for process in processes:
+                process.join(timeout=_STARTUP_S)
             return
         pool.shutdown(wait=True, cancel_futures=True)
 
