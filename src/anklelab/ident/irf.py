@@ -378,11 +378,7 @@ class PlatformFilters(Estimator):
         """The filter inputs for a motor angle: shape ``(..., n_inputs, n_times)``."""
         self._validate_params()
         angle = lowpass(motor_angle, fs, self.cutoff_hz, order=self.filter_order)
-        signals = {"angle": angle}
-        for deriv, name in ((1, "velocity"), (2, "acceleration")):
-            if name in self.inputs:
-                signals[name] = derivative(angle, fs, self.derivative_window, deriv=deriv)
-        return np.stack([signals[name] for name in self.inputs], axis=-2)
+        return self._kinematics(angle, fs, self.inputs)
 
     def fit(self, motor_angle: ArrayLike, forces: ArrayLike, *, fs: float) -> PlatformFilters:
         """Fit the filters on calibration data (nobody on the plate).
@@ -403,20 +399,30 @@ class PlatformFilters(Estimator):
         """
         forces = self._check_forces(forces)
         filtered = self._filtered(forces, fs)
-        est = ImpulseResponse(n_lags=self.lags, method=self.method)
-        est.fit(self.input_signals(motor_angle, fs), filtered)
-        self.irf_, self.order_, self.fs_ = est.irf_, est.order_, float(fs)
+        self._validate_params()
         angle = lowpass(motor_angle, fs, self.cutoff_hz, order=self.filter_order)
-        kinematics = np.moveaxis(self._kinematics(angle, fs), -2, 0).reshape(len(INPUTS), -1)
+        every = self._kinematics(angle, fs)  # the filters' inputs are some of these
+        est = ImpulseResponse(n_lags=self.lags, method=self.method)
+        est.fit(every[..., [INPUTS.index(name) for name in self.inputs], :], filtered)
+        self.irf_, self.order_, self.fs_ = est.irf_, est.order_, float(fs)
+        kinematics = np.moveaxis(every, -2, 0).reshape(len(INPUTS), -1)
         outputs = np.moveaxis(filtered, -2, 0).reshape(len(self.channels), -1)
         gains = np.linalg.lstsq(kinematics.T, outputs.T, rcond=None)[0]
         self.rigid_gains_: NDArray[np.float64] = np.ascontiguousarray(gains.T, dtype=np.float64)
         return self
 
-    def _kinematics(self, angle: NDArray[np.float64], fs: float) -> NDArray[np.float64]:
-        """A low-passed angle and its two derivatives, shape ``(..., 3, n_times)``."""
+    def _kinematics(
+        self, angle: NDArray[np.float64], fs: float, names: Sequence[str] = INPUTS
+    ) -> NDArray[np.float64]:
+        """The ``names`` of :data:`INPUTS` (a low-passed angle and its two derivatives) for
+        ``angle``, shape ``(..., len(names), n_times)``; only those are computed."""
         window = self.derivative_window
-        return np.stack([angle, *(derivative(angle, fs, window, deriv=d) for d in (1, 2))], axis=-2)
+        signals = {
+            name: angle if order == 0 else derivative(angle, fs, window, deriv=order)
+            for order, name in enumerate(INPUTS)
+            if name in names
+        }
+        return np.stack([signals[name] for name in names], axis=-2)
 
     def _check_forces(self, forces: ArrayLike) -> NDArray[np.float64]:
         forces = _as_batch(forces, "forces")
