@@ -12,6 +12,7 @@ import pytest
 from anklelab.data import (
     diff_sessions,
     load_session,
+    load_session_hashed,
     read_directory,
     read_hdf5,
     save_session,
@@ -83,6 +84,14 @@ def test_load_session_detects_kind_and_records_import_provenance(tmp_path):
     assert from_dir.provenance["created_by"] == "random_session"
     assert diff_sessions(load_session(h), s) == []  # native files come back as stored
     assert diff_sessions(from_dir, s, provenance=False) == []
+
+
+def test_a_session_read_with_its_hash_gives_the_hash_of_what_was_read(tmp_path):
+    s = random_session()
+    for path in (save_session(s, tmp_path / "d", format="dir"), save_session(s, tmp_path / "s.h5")):
+        session, digest = load_session_hashed(path)
+        assert digest == session_hash(path)
+        assert diff_sessions(session, load_session(path)) == []
 
 
 def test_session_hash_pins_every_file_read_and_only_those(tmp_path):

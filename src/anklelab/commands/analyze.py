@@ -164,14 +164,16 @@ def analyze(
         # the arguments checked, the figure workers start: they import matplotlib while this
         # process imports the analysis and reads the session (and are ended if that fails)
         renderer = stack.enter_context(_renderer(figures))
-        from anklelab.data import load_session, session_hash
+        from anklelab.data import load_session_hashed
         from anklelab.errors import AnklelabWarning
         from anklelab.ident.irf import PlatformFilters
         from anklelab.pipelines.walking import STEPS, analyze_walking
 
         filters = PlatformFilters.load(filters_file) if filters_file else None
         task = stack.enter_context(recording_progress())
-        session = load_session(session_path, progress=task(f"reading {session_path.name}"))
+        session, sha256 = load_session_hashed(
+            session_path, progress=task(f"reading {session_path.name}")
+        )
         step = task("analysing")
         total = len(STEPS) + 1 + figures
         names = list(STEPS)
@@ -192,7 +194,6 @@ def analyze(
                 filters_ready=draw_filters if figures else None,
             )
         step(len(STEPS), total)
-        sha256 = session_hash(session_path)
         document = results.to_dict(session=Path(session_path).name, session_sha256=sha256)
         write_text_atomic(run.directory / "results.json", json.dumps(document, indent=2))
         write_csv(run.directory / "results.csv", results.table())

@@ -63,7 +63,7 @@ def platform_filters(
     `anklelab analyze --filters`.
     """
     from anklelab.commands._files import output_file
-    from anklelab.data import load_session, session_hash
+    from anklelab.data import load_session_hashed
     from anklelab.pipelines.walking import fit_platform_filters, load_walking_settings
 
     session_input(session_path)
@@ -73,11 +73,13 @@ def platform_filters(
     named = [p for p in (session_path, settings_file) if p is not None]
     with output_file(out, force=force, inputs=named):
         with recording_progress() as task:
-            session = load_session(session_path, progress=task(f"reading {session_path.name}"))
+            session, sha256 = load_session_hashed(
+                session_path, progress=task(f"reading {session_path.name}")
+            )
         filters, vaf, by_channel = fit_platform_filters(session, settings)
         filters.save(
             out,
-            session=session_hash(session_path),
+            session=sha256,
             calibration_fit_trial=settings.calibration_fit_trial,
             vaf_percent_held_out=vaf.tolist(),
             vaf_percent_by_channel=dict(

@@ -44,6 +44,7 @@ _EXPORTS = {
     "WalkingTrial": "session",
     "diff_sessions": "store",
     "load_session": "store",
+    "load_session_hashed": "store",
     "save_session": "store",
     "session_hash": "store",
     "session_kind": "store",

@@ -50,6 +50,7 @@ __all__ = [
     "check_walking_trials",
     "info_from_mapping",
     "info_to_mapping",
+    "recordings_pass",
     "sample_label",
     "section_columns",
     "validate_session",
@@ -373,6 +374,30 @@ def _not_finite(values: NDArray[np.float64]) -> NDArray[np.bool_]:
     return ~np.isfinite(values)
 
 
+def recordings_pass(
+    names: Sequence[str],
+    data: NDArray[np.float64],
+    starts: NDArray[np.int64],
+    lengths: NDArray[np.int64],
+    required: tuple[str, ...],
+    fs: float,
+    *,
+    nullable: tuple[str, ...] = (),
+) -> bool:
+    """Whether every recording stored end to end in ``data`` (as in :func:`check_recordings`,
+    the ``required`` columns present) passes :func:`check_recording`, tested in one pass per
+    check: every required value finite (not infinite in a ``nullable`` column) and every time
+    step within :data:`RATE_TOLERANCE` of ``1 / fs``. ``False`` says only that one of them
+    would not pass; :func:`check_recording` then names the problem."""
+    period = 1.0 / fs
+    valid = {name: np.isinf if name in nullable else _not_finite for name in required}
+    if lengths.min() < 2 or any(bad(data[names.index(name)]).any() for name, bad in valid.items()):
+        return False
+    step = np.diff(data[names.index("time_s")])
+    step[starts[1:] - 1] = period  # across two recordings
+    return bool((np.abs(step - period) <= RATE_TOLERANCE * period).all())
+
+
 def check_recordings(
     files: Sequence[str],
     names: tuple[str, ...],
@@ -396,16 +421,7 @@ def check_recordings(
     if not len(files):
         return
     check_columns(files[0], names, required, "columns")
-    period = 1.0 / fs
-    valid = {name: np.isinf if name in nullable else _not_finite for name in required}
-    ok = bool(lengths.min() >= 2) and not any(
-        bad(data[names.index(name)]).any() for name, bad in valid.items()
-    )
-    if ok:
-        step = np.diff(data[names.index("time_s")])
-        step[starts[1:] - 1] = period  # across two recordings
-        ok = bool((np.abs(step - period) <= RATE_TOLERANCE * period).all())
-    if not ok:
+    if not recordings_pass(names, data, starts, lengths, required, fs, nullable=nullable):
         for file, start, n in zip(files, starts, lengths, strict=True):
             columns = {name: data[j, start : start + n] for j, name in enumerate(names)}
             check_recording(file, columns, required, fs, nullable=nullable)

@@ -65,6 +65,7 @@ from anklelab.data._checks import (
     excerpt,
     info_from_mapping,
     info_to_mapping,
+    recordings_pass,
     validate_session,
 )
 from anklelab.data._csv import NUMBER, decode, header, parse_numeric
@@ -165,7 +166,9 @@ def _recording(
     names = header(path, data, required)
     values, line = parse_numeric(path, data, names, nullable)
     columns = dict(zip(names, values, strict=True))
-    check_recording(str(path), columns, required, fs, line, nullable=nullable)
+    whole = np.array([0, values.shape[1]])
+    if not recordings_pass(names, values, whole[:1], whole[1:], required, fs, nullable=nullable):
+        check_recording(str(path), columns, required, fs, line, nullable=nullable)
     return Recording(path.name, columns)
 
 

@@ -67,17 +67,17 @@ def analyse_session_file(path: str, settings: WalkingSettings) -> dict[str, Any]
     """Read and analyse one session (in a worker); its results document and CSV rows."""
     import warnings
 
-    from anklelab.data import load_session, session_hash
+    from anklelab.data import load_session_hashed
     from anklelab.errors import AnklelabWarning
     from anklelab.pipelines.walking import analyze_walking
 
     start = time.perf_counter()
-    session = load_session(path)
+    session, sha256 = load_session_hashed(path)
     read = time.perf_counter()
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", AnklelabWarning)
         results = analyze_walking(session, settings)
-    document = results.to_dict(session=Path(path).name, session_sha256=session_hash(path))
+    document = results.to_dict(session=Path(path).name, session_sha256=sha256)
     return {
         "subject": session.info.subject,
         "document": document,
