@@ -218,11 +218,16 @@ def _filter(u: ArrayLike, irf: NDArray[np.float64]) -> NDArray[np.float64]:
     if u.shape[-2] != irf.shape[1]:
         raise ParameterError(f"u: expected {irf.shape[1]} inputs, got {u.shape[-2]}")
     n = u.shape[-1]
-    from scipy.fft import irfft, next_fast_len, rfft
+    nfft = _fft_length(n + irf.shape[-1] - 1)
+    spectrum = np.einsum("...if,oif->...of", np.fft.rfft(u, nfft), np.fft.rfft(irf, nfft))
+    return np.fft.irfft(spectrum, nfft)[..., :n]
 
-    nfft = next_fast_len(n + irf.shape[-1] - 1, real=True)
-    spectrum = np.einsum("...if,oif->...of", rfft(u, nfft), rfft(irf, nfft))
-    return irfft(spectrum, nfft)[..., :n]
+
+def _fft_length(n: int) -> int:
+    """The smallest power of two >= ``n``: NumPy's FFT is fast at any length made of 2, 3 and 5,
+    but ``scipy.fft.next_fast_len``, which finds the shortest, imports ``scipy.special`` (0.1 s
+    of every analysis); a power of two is at most twice as long."""
+    return 1 << (n - 1).bit_length()
 
 
 def _correlations(
@@ -234,15 +239,13 @@ def _correlations(
     ``uy[i, c, k] = sum_n u_i[n] y_c[n+k] / N`` with ``N`` the total number of samples.
     """
     n = u.shape[-1]
-    from scipy.fft import irfft, next_fast_len, rfft
-
-    nfft = next_fast_len(n + n_lags, real=True)
-    fu = rfft(u.reshape(-1, *u.shape[-2:]), nfft)
-    fy = rfft(y.reshape(-1, *y.shape[-2:]), nfft)
+    nfft = _fft_length(n + n_lags)
+    fu = np.fft.rfft(u.reshape(-1, *u.shape[-2:]), nfft)
+    fy = np.fft.rfft(y.reshape(-1, *y.shape[-2:]), nfft)
     cuu = np.einsum("rif,rjf->ijf", fu.conj(), fu)
     cuy = np.einsum("rif,rcf->icf", fu.conj(), fy)
     n_total = n * fu.shape[0]
-    return irfft(cuu, nfft) / n_total, irfft(cuy, nfft) / n_total, n_total
+    return np.fft.irfft(cuu, nfft) / n_total, np.fft.irfft(cuy, nfft) / n_total, n_total
 
 
 def _pinv_mdl(

@@ -48,8 +48,8 @@ from dataclasses import replace
 
 import numpy as np
 from numpy.typing import NDArray
-from scipy.special import stdtr, stdtrit
 
+from anklelab._student_t import t_cdf, t_quantile
 from anklelab.ident.impedance import ImpedanceFit, fit_impedance, impedance_torque
 from anklelab.pipelines.walking.responses import RESPONSE, Responses
 from anklelab.pipelines.walking.results import Estimate, TimingPoint, sd
@@ -200,7 +200,7 @@ def _estimate(
     centre, resampled, subsets = float(values[_FULL]), values[1 : 1 + n_reps], values[paper]
     if n_reps < 2 or n_trials < 2:
         return Estimate(centre, sd(subsets), (np.nan, np.nan), subsets)
-    random = stdtrit(n_trials - 1, 0.975) * np.sqrt(n_trials / (n_trials - 1)) * sd(resampled)
+    random = t_quantile(n_trials - 1, 0.975) * np.sqrt(n_trials / (n_trials - 1)) * sd(resampled)
     half = float(np.hypot(random, systematic))
     return Estimate(centre, sd(subsets), (centre - half, centre + half), subsets)
 
@@ -212,9 +212,9 @@ def _beyond(estimate: Estimate, threshold: float, n_trials: int) -> float:
     low, high = estimate.ci95
     if n_trials < 2 or not (np.isfinite(low) and np.isfinite(high)):
         return np.nan
-    se = (high - low) / 2 / stdtrit(n_trials - 1, 0.975)
+    se = (high - low) / 2 / t_quantile(n_trials - 1, 0.975)
     with np.errstate(divide="ignore", invalid="ignore"):
-        return float(stdtr(n_trials - 1, (abs(estimate.mean) - threshold) / se))
+        return t_cdf(n_trials - 1, float(np.divide(abs(estimate.mean) - threshold, se)))
 
 
 def estimate_timing_point(
