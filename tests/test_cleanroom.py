@@ -361,3 +361,33 @@ def test_the_twist_correction_delayed_by_the_coupler_lag_takes_the_damping_bias_
 
     assert abs(damping_error()) < 0.15
     assert damping_error(coupler_lag_ms=0.0) > 0.4
+
+
+def test_the_change_within_the_window_is_read_from_the_neighbouring_points():
+    """A human-like ankle whose stiffness rises 50 % in any 150 ms (+26 to +31 % over each
+    window): the neighbouring timing points' stiffnesses give each window's change closer to
+    the truth than the window's own linear model, and the diagnostic says it at every point."""
+    from anklelab.pipelines import WalkingSettings, analyze_walking
+
+    config = draw_config(
+        "human", 2, trials_per_point=40, n_calibration=2, calibration_duration_s=10.0, bench=False
+    )
+    config = dataclasses.replace(config, foot=dataclasses.replace(config.foot, rise_per_150ms=0.5))
+    session = generate(config, 2)
+    reference = session.truth["reference"]
+    errors = {}
+    for basis in ("neighbours", "window"):
+        results = analyze_walking(session, WalkingSettings(bootstrap_reps=20, change_basis=basis))
+        points = results.timing_points
+        truth = [
+            reference[p.direction][f"{p.delay_ms:g}"]["stiffness_change_fraction"] for p in points
+        ]
+        errors[basis] = np.array([p.stiffness_change.mean for p in points]) - truth
+        if basis == "neighbours":
+            assert all(p.stiffness_change_verdict == "changes" for p in points)
+            held = [
+                p.stiffness_change.ci95[0] <= t <= p.stiffness_change.ci95[1]
+                for p, t in zip(points, truth, strict=True)
+            ]
+            assert all(held), errors[basis]
+    assert np.abs(errors["neighbours"]).mean() < 0.5 * np.abs(errors["window"]).mean(), errors

@@ -52,7 +52,7 @@ def t_cdf(df: int, t: float) -> float:
         return math.nan
     if math.isinf(t):
         return float(t > 0)
-    half = 0.5 * _central(int(df), abs(t))
+    half = min(0.5 * _central(int(df), abs(t)), 0.5)  # rounding may take the sum past 1
     return 0.5 + half if t >= 0 else 0.5 - half
 
 

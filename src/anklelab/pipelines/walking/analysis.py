@@ -17,12 +17,13 @@ from anklelab.pipelines.walking.calibration import (
     score_filters,
     uncorrected_moment,
 )
+from anklelab.pipelines.walking.change import pool_changes
 from anklelab.pipelines.walking.checks import filter_summary, plausibility
 from anklelab.pipelines.walking.impedance import condition_order, estimate_timing_point
 from anklelab.pipelines.walking.responses import condition_responses, outliers
 from anklelab.pipelines.walking.results import WalkingResults
 from anklelab.pipelines.walking.settings import WalkingSettings
-from anklelab.pipelines.walking.stance import drop_summary, reason_kind, stance_trials
+from anklelab.pipelines.walking.stance import drop_summary, reason_kind, samples, stance_trials
 from anklelab.signals import Trials
 
 __all__ = ["STEPS", "analyze_walking"]
@@ -110,6 +111,7 @@ def analyze_walking(
             wild = np.isin(stance.selection, list(responses.dropped))
             stance = stance.drop(wild, [responses.dropped[p] for p in stance.selection[wild]])
         points.append(estimate_timing_point(responses, key, len(unperturbed), settings, rng))
+    points = pool_changes(points, settings, samples(settings.window_ms, stance.fs) / stance.fs)
     report(STEPS[3])
     held_out = len(session.calibration) > 1
     notes = plausibility(points, session.info.heel_to_ankle_m)

@@ -29,17 +29,11 @@ off the constant model's damping read +1.41 N·m·s/rad high (true 3.0), the lin
 +0.08. Where the stiffness is constant the linear model's damping and inertia are as unbiased
 and only less precise, which their intervals show.
 
-**The diagnostic.** The linear model is always fitted; ``k₁ W / k`` is the change of the
-stiffness over the window ``W`` as a fraction of it, with its interval. The stiffness is said to
-change within the window when the change lies beyond ``change_threshold`` on its estimate's
-side (above it, or below its negative) with a probability
-of at least ``change_confidence`` (Student's t about the estimate, with the standard error
-behind its interval), and never where the stiffness itself is poorly determined. Requiring
-the whole 95 % interval beyond the threshold missed 46 % of the changes of 25 % or more on the
-randomised twin, where 40 trials per point and thrice the noise leave the change's interval
-±15 % wide. Silence is not a finding that the stiffness is constant: that is said only when the
-change's whole 95 % interval lies within ±``change_threshold`` (an equivalence test); a point
-where the data can tell neither is ``"undetermined"`` (``stiffness_change_verdict``).
+**The change within the window.** The linear model is always fitted; ``k₁ W / k`` is the
+change of the stiffness over the window ``W`` as a fraction of it, with its interval, and the
+diagnostic is judged on it (:func:`~.change.judge_change`). The analysis then takes the change
+from the neighbouring timing points' stiffnesses where there are any, which is far more precise,
+and judges it again (:mod:`.change`).
 """
 
 from __future__ import annotations
@@ -49,8 +43,9 @@ from dataclasses import replace
 import numpy as np
 from numpy.typing import NDArray
 
-from anklelab._student_t import t_cdf, t_quantile
+from anklelab._student_t import t_quantile
 from anklelab.ident.impedance import ImpedanceFit, fit_impedance, impedance_torque
+from anklelab.pipelines.walking.change import change_warning, judge_change
 from anklelab.pipelines.walking.responses import RESPONSE, Responses
 from anklelab.pipelines.walking.results import Estimate, TimingPoint, sd
 from anklelab.pipelines.walking.settings import WalkingSettings
@@ -205,18 +200,6 @@ def _estimate(
     return Estimate(centre, sd(subsets), (centre - half, centre + half), subsets)
 
 
-def _beyond(estimate: Estimate, threshold: float, n_trials: int) -> float:
-    """Probability that the quantity lies beyond ±``threshold`` on its estimate's side:
-    Student's t (``n_trials - 1`` degrees of freedom) about the estimate, with the standard error
-    its 95 % interval was built from (NaN without an interval)."""
-    low, high = estimate.ci95
-    if n_trials < 2 or not (np.isfinite(low) and np.isfinite(high)):
-        return np.nan
-    se = (high - low) / 2 / t_quantile(n_trials - 1, 0.975)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        return t_cdf(n_trials - 1, float(np.divide(abs(estimate.mean) - threshold, se)))
-
-
 def estimate_timing_point(
     responses: Responses,
     key: str,
@@ -266,7 +249,6 @@ def estimate_timing_point(
     window_s = n / fs
     change = linear.stiffness_slope[0] * window_s / linear.stiffness[0]
     change_estimate = _estimate(change, reps, paper, len(trials))
-    probability = _beyond(change_estimate, settings.change_threshold, len(trials))
     full = averages[_FULL : _FULL + 1]
     shift = round(settings.timing_uncertainty_ms * fs / 1000.0)
     lag = settings.coupler_lag_ms * fs / 1000.0
@@ -298,22 +280,9 @@ def estimate_timing_point(
     analysis = ImpedanceFit(*(values[0][paper] for values in fitted[model]))
     subset_avg = averages[paper]
     weight = averages[_FULL, RESPONSE.index("angle"), :n] ** 2
-    # a change relative to a stiffness the data leave open is not asserted (a 2-trial point
-    # read +96 %, interval -1100 to +1300 %: Student's t with 1 degree of freedom gave 0.71)
     determined = not estimates["stiffness"].poorly_determined
-    changes = bool(probability >= settings.change_confidence and determined)
-    verdict = _change_verdict(change_estimate, changes, determined, settings.change_threshold)
-    warnings = _warnings(
-        key,
-        estimates,
-        change_estimate,
-        probability,
-        changes,
-        model,
-        settings.change_threshold,
-        window_s,
-    )
-    return TimingPoint(
+    probability, changes, verdict = judge_change(change_estimate, len(trials), determined, settings)
+    point = TimingPoint(
         delay_ms=float(key.split("/")[1]),
         direction=key.split("/")[0],
         n_perturbed=len(trials),
@@ -337,7 +306,7 @@ def estimate_timing_point(
             for w, k in zip(windows[1:], window_fits[model].stiffness[:, 0], strict=True)
         },
         adjustment_explained=responses.explained,
-        warnings=warnings,
+        warnings=_stiffness_warning(key, estimates["stiffness"]),
         onset_ms=trials.metadata["onset_ms"],
         time_s=np.arange(n) / fs,
         angle=subset_avg[:, RESPONSE.index("angle"), :n],
@@ -346,44 +315,18 @@ def estimate_timing_point(
             analysis, subset_avg[:, _KIN, :n], fs, time_angle=subset_avg[:, _TIME_ANGLE, :n]
         ),
     )
+    warning = change_warning(point, settings.change_threshold, window_s)
+    return replace(point, warnings=(*point.warnings, warning)) if warning else point
 
 
-def _change_verdict(change: Estimate, changes: bool, determined: bool, threshold: float) -> str:
-    """``"changes"``, ``"constant"`` (the change's 95 % interval within ±``threshold``: an
-    equivalence test) or ``"undetermined"`` (the data can tell neither)."""
-    if changes:
-        return "changes"
-    low, high = change.ci95
-    return "constant" if determined and -threshold < low and high < threshold else "undetermined"
-
-
-def _warnings(
-    key: str,
-    estimates: dict[str, Estimate],
-    change: Estimate,
-    probability: float,
-    changes: bool,
-    model: str,
-    threshold: float,
-    window_s: float,
-) -> tuple[str, ...]:
-    """What a reader must know about this timing point's numbers (damping and inertia that the
-    data determine poorly are flagged by their ``poorly_determined`` key, not warned about:
-    they often are, and the headline is the stiffness)."""
-    out = []
-    e = estimates["stiffness"]
-    if e.poorly_determined:
-        out.append(
-            f"{key}: stiffness is poorly determined by these data: 95 % interval "
-            f"[{e.ci95[0]:.3g}, {e.ci95[1]:.3g}] around {e.mean:.3g}; do not read it as a "
-            "precise number"
-        )
-    if changes and model == "constant":
-        out.append(
-            f"{key}: the stiffness changes within the {window_s * 1000:g} ms window by "
-            f"{change.mean:+.0%} (95 % interval {change.ci95[0]:+.0%} to {change.ci95[1]:+.0%}, "
-            f"probability {probability:.0%} that it exceeds ±{threshold:.0%}); "
-            "a constant stiffness lets damping and inertia absorb the change: consider "
-            'stiffness_model = "auto" or "linear"'
-        )
-    return tuple(out)
+def _stiffness_warning(key: str, stiffness: Estimate) -> tuple[str, ...]:
+    """The warning a poorly determined stiffness needs (damping and inertia that the data
+    determine poorly are flagged by their ``poorly_determined`` key, not warned about: they
+    often are, and the headline is the stiffness)."""
+    if not stiffness.poorly_determined:
+        return ()
+    return (
+        f"{key}: stiffness is poorly determined by these data: 95 % interval "
+        f"[{stiffness.ci95[0]:.3g}, {stiffness.ci95[1]:.3g}] around {stiffness.mean:.3g}; do not "
+        "read it as a precise number",
+    )

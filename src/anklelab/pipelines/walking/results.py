@@ -138,8 +138,12 @@ class TimingPoint:
         setting is ``"auto"``, and then damping and inertia come from the linear model; a model
         set by hand gives all three).
     stiffness_change : Estimate
-        Change of the stiffness over the analysis window as a fraction of it, ``k₁ W / k``, from
-        the linear model (always fitted).
+        Change of the stiffness over the analysis window as a fraction of it: from the
+        neighbouring timing points' stiffnesses where the direction has more than one
+        (:mod:`.change`), else ``k₁ W / k`` from the window's linear model (always fitted).
+    stiffness_change_in_window : Estimate or None
+        ``k₁ W / k`` from the window's linear model, when ``stiffness_change`` came from the
+        neighbouring timing points (None otherwise, and in files written before it existed).
     stiffness_changes : bool
         The diagnostic: the stiffness changes within the window by more than
         ``change_threshold``, with a probability of at least ``change_confidence``.
@@ -181,6 +185,7 @@ class TimingPoint:
     stiffness_slope: Estimate | None = None
     stiffness_change_probability: float = np.nan
     stiffness_change_verdict: str | None = None
+    stiffness_change_in_window: Estimate | None = None
     window_stiffness: dict[str, float] = field(default_factory=dict)
     adjustment_explained: float = 0.0
     warnings: tuple[str, ...] = ()
@@ -216,6 +221,11 @@ class TimingPoint:
             "stiffness_changes": self.stiffness_changes,
             "stiffness_change_probability": self.stiffness_change_probability,
             "stiffness_change_verdict": self.stiffness_change_verdict,
+            **(
+                {"stiffness_change_in_window": self.stiffness_change_in_window.to_dict()}
+                if self.stiffness_change_in_window is not None
+                else {}
+            ),
             "window_sensitivity": {
                 key: {"stiffness_nm_per_rad": value} for key, value in self.window_stiffness.items()
             },
@@ -232,6 +242,7 @@ class TimingPoint:
             }
             slope = node.get(SLOPE.key)
             change = node.get(CHANGE.key)
+            in_window = node.get("stiffness_change_in_window")
             return cls(
                 delay_ms=float(node["delay_ms"]),
                 direction=str(node["direction"]),
@@ -249,6 +260,11 @@ class TimingPoint:
                 else None,
                 stiffness_change_probability=_float(node.get("stiffness_change_probability")),
                 stiffness_change_verdict=node.get("stiffness_change_verdict"),
+                stiffness_change_in_window=Estimate.from_dict(
+                    in_window, f"{where}.stiffness_change_in_window"
+                )
+                if in_window
+                else None,
                 window_stiffness={
                     key: float(value["stiffness_nm_per_rad"])
                     for key, value in node.get("window_sensitivity", {}).items()
