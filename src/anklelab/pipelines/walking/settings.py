@@ -113,7 +113,7 @@ class WalkingSettings(Parameters):
         the slope of the stiffness across the neighbouring timing points of its direction (the
         window's own linear model where a direction has one point), or ``"window"``, the
         window's linear model everywhere (far less precise: root-mean-square error 0.080
-        against 0.031 on 200 held-out randomised-twin sessions; see :mod:`.change`).
+        against 0.024 on 200 held-out randomised-twin sessions; see :mod:`.change`).
     change_threshold, change_confidence
         The stiffness is reported as changing within the window when the probability that its
         change over the window (a fraction of it) lies beyond ``change_threshold`` on its
