@@ -26,6 +26,7 @@ RANK = {
     "errors": 0,
     "forceplate": 0,
     "metrics": 0,
+    "_student_t": 0,  # Student's t without SciPy: the analysis's intervals
     "iir": 0,  # filter designs and the zero-phase filter: the twin and the analysis share them
     "platforms": 1,
     "sim": 2,
