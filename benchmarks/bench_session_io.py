@@ -5,9 +5,10 @@ its peak memory, as the best of a few runs, next to the same command of anklelab
 fast path (main at :data:`BASELINE_COMMIT`, extracted with ``git archive`` and run by the same
 interpreter). Each version reads its own HDF5 store: the baseline the one-dataset-per-column
 ``anklelab-h5/1`` file its ``import`` writes, ours the ``anklelab-h5/2`` file ours writes.
-``import`` + ``analyze`` is also timed against the plain reference analysis of the same CSV
-directory (:mod:`benchmarks.plain_reference`: pandas file by file, the per-trial loop of paper
-000's model, no figures), as a whole process.
+``import`` + ``analyze``, and ``analyze`` straight from the directory (one command), are also
+timed against the plain reference analysis of the same CSV directory
+(:mod:`benchmarks.plain_reference`: pandas file by file, the per-trial loop of paper 000's
+model, no figures), as a whole process.
 
 The session is the twin's paper-size experiment (``simulate_perturberator(seed=0)``: 5
 calibration, 800 walking and 15 bench recordings, truth time courses included). ``--scale 4``
@@ -201,6 +202,9 @@ def run(scale: int = 1) -> list[Result]:
             rows.setdefault("analyze", {})[v] = _best(
                 ["analyze", str(h5[v]), "--out", str(out)], src, clean=out
             )
+            rows.setdefault("analyze dir", {})[v] = _best(
+                ["analyze", str(directory), "--out", str(out)], src, clean=out
+            )
         plain = _best([str(directory)], None, code=PLAIN) if scale == 1 else None
     label = f"{n} walking trials, {data_mib:.0f} MiB of numbers"
     what = f"anklelab at {BASELINE_COMMIT[:7]} (before the fast path)"
@@ -209,6 +213,7 @@ def run(scale: int = 1) -> list[Result]:
         "read dir": "session info DIR (read the CSV directory)",
         "import": "import DIR --out S.h5",
         "analyze": "analyze S.h5 (figures included)",
+        "analyze dir": "analyze DIR (figures included: one command from the CSV directory)",
     }
     results = []
     for index, kind in ((0, "wall"), (1, "CPU")):
@@ -218,15 +223,19 @@ def run(scale: int = 1) -> list[Result]:
         both = [sum(rows[k][v][index] for k in ("import", "analyze")) for v in ("ours", "baseline")]
         results.append(Result(f"import + analyze of the CSV directory, {kind}", *both, what))
         if plain is not None:
-            results.append(
-                Result(
-                    f"import + analyze of the CSV directory, {kind}",
-                    both[0],
-                    plain[index],
-                    "plain reference: pandas per file, per-trial loop, no figures",
+            for title, ours in (
+                ("import + analyze of the CSV directory", both[0]),
+                ("analyze DIR", rows["analyze dir"]["ours"][index]),
+            ):
+                results.append(
+                    Result(
+                        f"{title}, {kind}",
+                        ours,
+                        plain[index],
+                        "plain reference: pandas per file, per-trial loop, no figures",
+                    )
                 )
-            )
-    for key in ("read h5", "read dir", "import", "analyze"):
+    for key in ("read h5", "read dir", "import", "analyze", "analyze dir"):
         ours, base = rows[key]["ours"][2], rows[key]["baseline"][2]
         name = f"peak memory: {titles[key].split(' (')[0]} ({ours / data_mib:.1f}x the data)"
         results.append(Result(name, ours, base, what, unit="MiB"))
