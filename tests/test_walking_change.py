@@ -1,5 +1,7 @@
 """The change of the stiffness within each window, from the neighbouring timing points."""
 
+import dataclasses
+
 import numpy as np
 import pytest
 
@@ -119,3 +121,22 @@ def test_the_verdict_and_the_warning_follow_the_neighbours_change():
         assert p.stiffness_change_probability > 0.95
         (warning,) = p.warnings
         assert warning.startswith(f"{p.key}: the stiffness changes within the 100 ms window by +")
+
+
+def test_the_points_are_placed_at_their_mean_detected_onsets():
+    """Onsets detected 20 ms late at one point make its neighbours' span 20 ms shorter; a point
+    without detected onsets sits at its manifest delay."""
+
+    def stiffness(t):
+        return 1000.0 * np.exp(2.7 * t)
+
+    points = _session(stiffness)[:4]
+    late = [
+        dataclasses.replace(p, onset_ms=np.array([p.delay_ms + (20.0 if i == 2 else 0.0), np.nan]))
+        for i, p in enumerate(points)
+    ]
+    pooled = pool_changes(late, WalkingSettings(), W)
+    rate = np.log(stiffness(0.35) / stiffness(0.1)) / 0.27  # from 100 to 350 + 20 ms
+    assert pooled[1].stiffness_change.mean == pytest.approx(2 * np.sinh(rate * W / 2))
+    plain = pool_changes(points, WalkingSettings(), W)
+    assert plain[1].stiffness_change.mean == pytest.approx(2 * np.sinh(2.7 * W / 2))

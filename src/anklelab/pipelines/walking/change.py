@@ -251,7 +251,8 @@ def pool_changes(
 def _time_ms(point: TimingPoint) -> float:
     """When the point's window starts: its mean detected onset (the manifest's delay without
     onsets), ms after heel contact."""
-    return float(np.mean(point.onset_ms)) if point.onset_ms.size else point.delay_ms
+    onsets = point.onset_ms[np.isfinite(point.onset_ms)]
+    return float(onsets.mean()) if onsets.size else point.delay_ms
 
 
 def _disagreement(points: list[TimingPoint], found: dict[int, _Neighbours]) -> float:
