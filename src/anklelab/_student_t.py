@@ -5,7 +5,10 @@ intervals and the CDF for the probability that a change exceeds a threshold. Imp
 ``scipy.special`` for them cost every ``anklelab analyze`` 0.13 s, a tenth of the command on a
 paper-size session. For whole degrees of freedom the CDF is a finite sum (Abramowitz & Stegun
 26.7.3-4), and the quantile follows by bisection on it. They agree with ``scipy.special.stdtr``
-to 1e-13 and with ``stdtrit`` to 1e-10 relative (the tests compare them).
+to 1e-13 (absolute: a far tail, below 1e-13, is not resolved) and with ``stdtrit`` to 1e-10
+relative for 1e-4 <= p <= 1 - 1e-4 (the tests compare them). The sums take ``df / 2`` terms:
+fine for the trials of a timing point (``t_quantile(3199, 0.975)`` takes 6 ms), not for
+millions of degrees of freedom.
 
 On the ground floor: it imports nothing of anklelab.
 """
@@ -13,6 +16,7 @@ On the ground floor: it imports nothing of anklelab.
 from __future__ import annotations
 
 import math
+import numbers
 
 __all__ = ["t_cdf", "t_quantile"]
 
@@ -35,12 +39,30 @@ def _central(df: int, t: float) -> float:
 
 
 def _check(df: int) -> None:
-    if int(df) != df or df < 1:
+    number = isinstance(df, numbers.Real) and not isinstance(df, bool)
+    if not (number and float(df).is_integer() and df >= 1):  # is_integer: False for NaN, inf
         raise ValueError(f"degrees of freedom: got {df!r}; expected a whole number >= 1")
 
 
 def t_cdf(df: int, t: float) -> float:
     """``P(T <= t)`` for Student's t with ``df`` degrees of freedom (as ``scipy.special.stdtr``).
+
+    Parameters
+    ----------
+    df : int
+        Degrees of freedom, a whole number >= 1.
+    t : float
+        Where the distribution function is taken (NaN gives NaN, ±inf 1 or 0).
+
+    Returns
+    -------
+    float
+        The probability, to 1e-13.
+
+    Raises
+    ------
+    ValueError
+        ``df`` is not a whole number >= 1.
 
     Examples
     --------
@@ -58,6 +80,23 @@ def t_cdf(df: int, t: float) -> float:
 
 def t_quantile(df: int, p: float) -> float:
     """The ``t`` with ``P(T <= t) = p`` (as ``scipy.special.stdtrit``).
+
+    Parameters
+    ----------
+    df : int
+        Degrees of freedom, a whole number >= 1.
+    p : float
+        The probability; 0 and 1 give -inf and inf, anything outside [0, 1] NaN.
+
+    Returns
+    -------
+    float
+        The quantile (relative error below 1e-10 for 1e-4 <= p <= 1 - 1e-4).
+
+    Raises
+    ------
+    ValueError
+        ``df`` is not a whole number >= 1.
 
     Examples
     --------

@@ -384,11 +384,32 @@ def recordings_pass(
     *,
     nullable: tuple[str, ...] = (),
 ) -> bool:
-    """Whether every recording stored end to end in ``data`` (as in :func:`check_recordings`,
-    the ``required`` columns present) passes :func:`check_recording`, tested in one pass per
-    check: every required value finite (not infinite in a ``nullable`` column) and every time
-    step within :data:`RATE_TOLERANCE` of ``1 / fs``. ``False`` says only that one of them
-    would not pass; :func:`check_recording` then names the problem."""
+    """Whether the quick test, one array pass per check, shows that every recording stored end
+    to end in ``data`` passes :func:`check_recording`: every required value finite (not
+    infinite in a ``nullable`` column) and every time step within :data:`RATE_TOLERANCE` of
+    ``1 / fs``.
+
+    Parameters
+    ----------
+    names : sequence of str
+        The rows of ``data`` (the ``required`` columns among them).
+    data : ndarray, shape (n_columns, n_samples)
+        The recordings end to end.
+    starts, lengths : ndarray of int
+        Where each recording starts in ``data`` and its samples.
+    required : tuple of str
+        The columns checked.
+    fs : float
+        Sample rate, Hz.
+    nullable : tuple of str
+        Required columns that may hold NaN (empty cells).
+
+    Returns
+    -------
+    bool
+        ``True``: each recording would pass. ``False`` decides nothing (a step 10 % off passes
+        :func:`check_recording` if the median step is right): run it, which names any problem.
+    """
     period = 1.0 / fs
     valid = {name: np.isinf if name in nullable else _not_finite for name in required}
     if lengths.min() < 2 or any(bad(data[names.index(name)]).any() for name, bad in valid.items()):

@@ -130,7 +130,22 @@ def load_session_hashed(
 ) -> tuple[Session, str]:
     """:func:`load_session` and the :func:`session_hash` of what it read, for the provenance
     of results: a directory's files are hashed as they are read, not read a second time (0.2 s
-    on a paper-size session)."""
+    on a paper-size session).
+
+    Parameters
+    ----------
+    path : str or Path
+        The session (a CSV directory, a native ``.h5`` or a MATLAB ``.mat``).
+    progress : callable, optional
+        Called as ``progress(done, total)`` after each recording is read.
+
+    Returns
+    -------
+    session : Session
+        As :func:`load_session` gives it.
+    sha256 : str
+        Hex SHA-256, as :func:`session_hash` gives it for ``path``.
+    """
     kind = session_kind(path)
     if kind == "h5":
         return read_hdf5(path, progress=progress), session_hash(path)

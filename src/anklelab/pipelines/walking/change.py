@@ -3,9 +3,11 @@
 **Two estimates of one change.** The linear model's slope gives the change within the window
 ``W`` from that window alone (``k₁ W / k``, :mod:`.impedance`). The stiffnesses of the
 neighbouring timing points of the same direction give it too: the stiffness's relative rate
-``r = (ln k₊ - ln k₋) / (t₊ - t₋)``, ``t`` each point's mean onset (a central difference
-between two neighbours, a one-sided one at the first and the last point), makes a change of
-``(k(W) - k(0)) / k(W / 2) = 2 sinh(r W / 2)`` over the window. The rate is taken on the
+``r = (ln k₊ - ln k₋) / (t₊ - t₋)``, ``t`` each point's mean onset plus the θ²-weighted time
+``t_c`` of its window, where its stiffness is read (a central difference between two
+neighbours, a one-sided one at the first and the last point), makes a change of
+``(k(W) - k(0)) / k(t_c) = e^(r (W - t_c)) - e^(-r t_c)`` over the window (``2 sinh(r W / 2)``
+for ``t_c = W / 2``). The rate is taken on the
 logarithm because a stiffness grows and falls in proportion to itself: for the clean-room
 generator's human ankle (+50 % in any 150 ms) it is exact, where a difference of ``k`` itself
 was 18 % off at the ends. The neighbours' estimate is far more precise than the window's: over
@@ -13,11 +15,15 @@ a window of 100 ms the slope rests on the curvature of one average response, acr
 two well-determined stiffnesses. Its error is the curvature of ``ln k(t)`` between the points,
 which the intervals count twice over:
 
-- at the first and the last point, where the difference is one-sided, the move to the slope of
-  a parabola through three points is added in quadrature;
+- at the first and the last point of a direction with three or more, where the difference is
+  one-sided, the move to the slope of a parabola through three points is added in quadrature;
 - everywhere, the spread the two estimates disagree by beyond their own standard errors
   (``τ² = mean(d² - se_window² - se_points²)``, ``d`` their difference over every point of the
-  session, a method-of-moments random-effects variance) is added to the variance.
+  session, both directions together: one bend widens every interval) is added to the variance
+  (a method-of-moments random-effects variance).
+
+The interval takes Student's t with the degrees of freedom of the fewer-trial neighbour, whose
+trials it rests on (not the point's own).
 
 **Measured** (``validation.accuracy``), against the window-only estimate:
 
@@ -84,13 +90,31 @@ def _beyond(estimate: Estimate, threshold: float, n_trials: int) -> float:
 def judge_change(
     change: Estimate, n_trials: int, determined: bool, settings: WalkingSettings
 ) -> tuple[float, bool, str]:
-    """The diagnostic for one timing point (module docstring): the probability that the change
-    lies beyond ``change_threshold`` on its estimate's side, whether the stiffness is said to
-    change, and the verdict ``"changes"``, ``"constant"`` or ``"undetermined"``.
+    """The diagnostic for one timing point (module docstring).
 
-    ``determined``: the stiffness itself is not poorly determined (a change relative to a
-    stiffness the data leave open is not asserted: a 2-trial point read +96 %, interval -1100 to
-    +1300 %, and Student's t with 1 degree of freedom gave 0.71).
+    Parameters
+    ----------
+    change : Estimate
+        The change of the stiffness over the window, a fraction of it, with its 95 % interval.
+    n_trials : int
+        The trials the interval was built on (Student's t with ``n_trials - 1`` degrees of
+        freedom).
+    determined : bool
+        The stiffness itself is not poorly determined: a change relative to a stiffness the
+        data leave open is not asserted (a 2-trial point read +96 %, interval -1100 to
+        +1300 %, and Student's t with 1 degree of freedom gave 0.71).
+    settings : WalkingSettings
+        ``change_threshold`` and ``change_confidence``.
+
+    Returns
+    -------
+    probability : float
+        That the change lies beyond ``change_threshold`` on its estimate's side (NaN without an
+        interval).
+    changes : bool
+        Whether the stiffness is said to change within the window.
+    verdict : {"changes", "constant", "undetermined"}
+        ``"constant"`` only when the whole interval lies within ±``change_threshold``.
     """
     threshold = settings.change_threshold
     probability = _beyond(change, threshold, n_trials)
@@ -106,8 +130,22 @@ def judge_change(
 
 
 def change_warning(point: TimingPoint, threshold: float, window_s: float) -> str | None:
-    """The warning a constant-stiffness fit needs when the stiffness changes within its window
-    (``None`` otherwise)."""
+    """The warning a constant-stiffness fit needs when the stiffness changes within its window.
+
+    Parameters
+    ----------
+    point : TimingPoint
+        Its change, the diagnostic's probability and its stiffness model.
+    threshold : float
+        ``change_threshold``, a fraction.
+    window_s : float
+        The analysis window, s.
+
+    Returns
+    -------
+    str or None
+        The warning, or ``None`` when the point needs none.
+    """
     if not (point.stiffness_changes and point.stiffness_model == "constant"):
         return None
     change = point.stiffness_change
@@ -126,6 +164,7 @@ class _Neighbours:
 
     change: float
     variance: float  # of the change, curvature at an end included
+    n_trials: int  # of the fewer-trial neighbour: its Student's t
     samples: NDArray[np.float64]  # over paper 000's subsets (for its sd)
 
 
@@ -162,32 +201,36 @@ def _from_neighbours(
         centre = _weighted_time(point, window_s)
         rate = (log_k[high] - log_k[low]) / span
         change = _relative_change(rate, window_s, centre)
-        slope = _relative_change(rate, window_s, centre, derivative=True) / span  # per ln k
+        slope = _relative_change_slope(rate, window_s, centre) / span  # per unit of ln k
         variance = slope**2 * ((se[low] / k[low]) ** 2 + (se[high] / k[high]) ** 2)
+        n_trials = min(points[low].n_perturbed, points[high].n_perturbed)
         near = np.arange(3) if i == 0 else np.arange(m - 3, m)
         if m >= 3 and i in (0, m - 1) and np.isfinite(log_k[near]).all():
             # one-sided: the parabola's slope says what the difference misses
             curved = _slope_weights(times[near], times[i]) @ log_k[near]
             parabola = _relative_change(curved, window_s, centre)
-            t = t_quantile(max(point.n_perturbed - 1, 1), 0.975)
+            t = t_quantile(max(n_trials - 1, 1), 0.975)
             variance += ((parabola - change) / t) ** 2
-        subsets = [points[j].stiffness.samples for j in (low, high)]
-        same = subsets[0].size == subsets[1].size > 0
+        count = min(points[low].stiffness.samples.size, points[high].stiffness.samples.size)
         with np.errstate(divide="ignore", invalid="ignore"):
-            rates = (np.log(subsets[1]) - np.log(subsets[0])) / span if same else np.array([])
+            rates = np.log(points[high].stiffness.samples[:count])
+            rates = (rates - np.log(points[low].stiffness.samples[:count])) / span
         samples = _relative_change(rates[np.isfinite(rates)], window_s, centre)
-        out.append(_Neighbours(float(change), float(variance), samples))
+        out.append(_Neighbours(float(change), float(variance), n_trials, samples))
     return out
 
 
-def _relative_change(rate: Any, window_s: float, centre: float, derivative: bool = False) -> Any:
+def _relative_change(rate: Any, window_s: float, centre: float) -> Any:
     """The change over a window of ``window_s`` relative to the stiffness at ``centre`` (s into
     it), ``(k(W) - k(0)) / k(centre)``, for a stiffness changing at the relative rate ``rate``
-    (``d ln k / dt``, 1/s); with ``derivative``, its derivative with respect to ``rate``."""
-    late, early = window_s - centre, -centre
-    if derivative:
-        return late * np.exp(rate * late) - early * np.exp(rate * early)
-    return np.exp(rate * late) - np.exp(rate * early)
+    (``d ln k / dt``, 1/s)."""
+    return np.exp(rate * (window_s - centre)) - np.exp(-rate * centre)
+
+
+def _relative_change_slope(rate: float, window_s: float, centre: float) -> float:
+    """The derivative of :func:`_relative_change` with respect to ``rate``, s."""
+    late = window_s - centre
+    return float(late * np.exp(rate * late) + centre * np.exp(-rate * centre))
 
 
 def _weighted_time(point: TimingPoint, window_s: float) -> float:
@@ -221,7 +264,7 @@ def pool_changes(
     found: dict[int, _Neighbours] = {}
     for direction in dict.fromkeys(p.direction for p in points):
         members = [i for i, p in enumerate(points) if p.direction == direction]
-        times = np.array([_time_ms(points[i]) / 1000.0 for i in members])
+        times = np.array([_time_s(points[i], window_s) for i in members])
         order = [members[j] for j in np.argsort(times, kind="stable")]
         if len(order) < 2:
             continue
@@ -236,31 +279,33 @@ def pool_changes(
             out.append(point)
             continue
         estimate = found[i]
-        n = point.n_perturbed
-        half = t_quantile(max(n - 1, 1), 0.975) * np.sqrt(estimate.variance + spread)
+        t = t_quantile(max(estimate.n_trials - 1, 1), 0.975)
+        half = t * np.sqrt(estimate.variance + spread)
         change = Estimate(
             estimate.change,
             sd(estimate.samples) if estimate.samples.size else np.nan,
             (estimate.change - half, estimate.change + half),
             estimate.samples,
         )
-        out.append(_judged(point, change, settings, window_s))
+        out.append(_judged(point, change, estimate.n_trials, settings, window_s))
     return out
 
 
-def _time_ms(point: TimingPoint) -> float:
-    """When the point's window starts: its mean detected onset (the manifest's delay without
-    onsets), ms after heel contact."""
+def _time_s(point: TimingPoint, window_s: float) -> float:
+    """When the point's stiffness is read: its mean detected onset (the manifest's delay
+    without onsets) plus its window's θ²-weighted time, s after heel contact."""
     onsets = point.onset_ms[np.isfinite(point.onset_ms)]
-    return float(onsets.mean()) if onsets.size else point.delay_ms
+    start = float(onsets.mean()) if onsets.size else point.delay_ms
+    return start / 1000.0 + _weighted_time(point, window_s)
 
 
 def _disagreement(points: list[TimingPoint], found: dict[int, _Neighbours]) -> float:
     """``τ²``: the variance by which the window's and the neighbours' changes differ beyond
     their own (module docstring); 0 when they agree within it."""
+    own = {i: _own_change(points[i]) for i in found}
     excess = [
-        (points[i].stiffness_change.mean - e.change) ** 2
-        - _standard_error(points[i].stiffness_change, points[i].n_perturbed) ** 2
+        (own[i].mean - e.change) ** 2
+        - _standard_error(own[i], points[i].n_perturbed) ** 2
         - e.variance
         for i, e in found.items()
     ]
@@ -268,17 +313,29 @@ def _disagreement(points: list[TimingPoint], found: dict[int, _Neighbours]) -> f
     return max(0.0, float(np.mean(finite))) if finite else 0.0
 
 
+def _own_change(point: TimingPoint) -> Estimate:
+    """The change the point's own window gives (kept aside once the neighbours' replaced it)."""
+    if point.stiffness_change_in_window is not None:
+        return point.stiffness_change_in_window
+    return point.stiffness_change
+
+
 def _judged(
-    point: TimingPoint, change: Estimate, settings: WalkingSettings, window_s: float
+    point: TimingPoint,
+    change: Estimate,
+    n_trials: int,
+    settings: WalkingSettings,
+    window_s: float,
 ) -> TimingPoint:
-    """``point`` with ``change`` as its stiffness change (its own window's kept beside it) and
-    the diagnostic, the verdict and the warning judged on it."""
+    """``point`` with ``change`` (its interval built on ``n_trials``) as its stiffness change,
+    its own window's kept beside it, and the diagnostic, the verdict and the warning judged on
+    it."""
     determined = not point.stiffness.poorly_determined
-    probability, changes, verdict = judge_change(change, point.n_perturbed, determined, settings)
+    probability, changes, verdict = judge_change(change, n_trials, determined, settings)
     judged = replace(
         point,
         stiffness_change=change,
-        stiffness_change_in_window=point.stiffness_change,
+        stiffness_change_in_window=_own_change(point),
         stiffness_changes=changes,
         stiffness_change_probability=probability,
         stiffness_change_verdict=verdict,
