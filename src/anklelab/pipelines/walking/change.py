@@ -236,9 +236,9 @@ def _relative_change_slope(rate: float, window_s: float, centre: float) -> float
 def _weighted_time(point: TimingPoint, window_s: float) -> float:
     """The θ²-weighted mean time of the point's window (where its stiffness is read), s; the
     window's middle without its responses."""
-    if not point.angle.size:
+    weight = point.angle.mean(axis=0) ** 2 if point.angle.size else np.zeros(0)
+    if not weight.sum() > 0:
         return window_s / 2
-    weight = point.angle.mean(axis=0) ** 2
     return float(weight @ point.time_s / weight.sum())
 
 
