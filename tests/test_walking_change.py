@@ -4,6 +4,8 @@ import dataclasses
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from anklelab._student_t import t_quantile
 from anklelab.pipelines.walking import WalkingSettings
@@ -17,8 +19,9 @@ DELAYS = (100.0, 225.0, 350.0, 475.0)
 
 
 def _point(direction, delay_ms, k, se_k, change, se_change, model="linear", n=N):
-    """A timing point whose stiffness and window change have these standard errors."""
-    t = t_quantile(n - 1, 0.975)
+    """A timing point whose stiffness and window change have these standard errors (no
+    intervals with one trial, as the analysis gives)."""
+    t = t_quantile(n - 1, 0.975) if n > 1 else np.nan
     nothing = Estimate(1.0, 0.0, (0.5, 1.5))
     return TimingPoint(
         delay_ms=delay_ms, direction=direction, n_perturbed=n, n_unperturbed=100, cop_m=0.05,
@@ -189,3 +192,36 @@ def test_a_window_warning_the_neighbours_overrule_is_removed():
     for p in pool_changes(points, WalkingSettings(), W):
         assert not p.stiffness_changes and p.stiffness_change.mean == pytest.approx(0.0)
         assert p.warnings == ("another doubt",)
+
+
+@settings(max_examples=200, deadline=None)
+@given(
+    st.lists(
+        st.tuples(
+            st.sampled_from(["dorsi", "plantar"]),
+            st.sampled_from(DELAYS),
+            st.one_of(st.floats(-2000.0, 5000.0), st.just(np.nan)),  # stiffness
+            st.one_of(st.floats(0.0, 500.0), st.just(np.nan)),  # its standard error
+            st.floats(-1.0, 1.0),  # the window's change
+            st.integers(1, 100),  # trials
+        ),
+        max_size=8,
+        unique_by=lambda row: row[:2],
+    )
+)
+def test_any_set_of_points_pools_without_error_into_valid_verdicts(rows):
+    points = [
+        _point(direction, delay, k, se, change, 0.05, n=n)
+        for direction, delay, k, se, change, n in rows
+    ]
+    pooled = pool_changes(points, WalkingSettings(), W)
+    assert [p.key for p in pooled] == [p.key for p in points]
+    for before, p in zip(points, pooled, strict=True):
+        assert p.stiffness_change_verdict in ("changes", "constant", "undetermined", None)
+        probability = p.stiffness_change_probability
+        assert np.isnan(probability) or 0.0 <= probability <= 1.0
+        if p.stiffness_changes:  # never said of a stiffness the data leave open
+            assert not p.stiffness.poorly_determined
+        if p.stiffness_change_in_window is not None:  # replaced: a finite change from positives
+            assert np.isfinite(p.stiffness_change.mean)
+            assert p.stiffness_change_in_window == before.stiffness_change
