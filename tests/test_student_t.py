@@ -32,6 +32,8 @@ def test_one_degree_of_freedom_is_cauchy_and_the_ends_are_exact():
     assert math.isnan(t_cdf(5, math.nan))
     assert t_quantile(5, 0.0) == -math.inf and t_quantile(5, 1.0) == math.inf
     assert math.isnan(t_quantile(5, 1.5))
+    t_quantile(1, 0.975)  # cached: a bool must not find it
     for df in (2.5, 0, True, math.nan, math.inf, "3"):
-        with pytest.raises(ValueError, match=r"degrees of freedom: got .*; expected a whole"):
-            t_cdf(df, 1.0)
+        for function in (t_cdf, t_quantile):
+            with pytest.raises(ValueError, match=r"degrees of freedom: got .*; expected a whole"):
+                function(df, 0.975)

@@ -15,6 +15,7 @@ On the ground floor: it imports nothing of anklelab.
 
 from __future__ import annotations
 
+import functools
 import math
 import numbers
 
@@ -78,6 +79,7 @@ def t_cdf(df: int, t: float) -> float:
     return 0.5 + half if t >= 0 else 0.5 - half
 
 
+@functools.lru_cache(maxsize=1024, typed=True)  # an analysis asks for a few, 100+ times
 def t_quantile(df: int, p: float) -> float:
     """The ``t`` with ``P(T <= t) = p`` (as ``scipy.special.stdtrit``).
 
