@@ -303,3 +303,12 @@ def test_a_filter_file_without_rigid_gains_takes_the_filters_summed_gains(calibr
         path.write_text(json.dumps(filters.to_dict() | {"rigid_gains": bad}))
         with pytest.raises(ParameterError, match="rigid_gains: expected finite values of shape"):
             PlatformFilters.load(path)
+
+
+def test_fft_lengths_are_scipys_fast_lengths():
+    from scipy.fft import next_fast_len
+
+    from anklelab.ident.irf import _fft_length
+
+    lengths = [*range(1, 3000), 4097, 15_001, 65_537]
+    assert [_fft_length(n) for n in lengths] == [next_fast_len(n, real=True) for n in lengths]
