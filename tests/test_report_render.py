@@ -197,3 +197,30 @@ def test_a_ctrl_c_while_workers_start_reaches_the_command_once_they_have():
         assert received == [signal.SIGINT]
     finally:
         signal.signal(signal.SIGINT, previous)
+
+
+def test_a_ctrl_c_taken_by_another_thread_is_held_back_too():
+    """A signal sent to the process may be taken by any thread that does not block it (a
+    thread pool's); its handler then runs in the main thread at once, block or no block."""
+    import signal
+    import threading
+    import time
+
+    from anklelab.report.render import _ctrl_c_held
+
+    received = []
+    previous = signal.signal(signal.SIGINT, lambda number, frame: received.append(number))
+    done = threading.Event()
+    other = threading.Thread(target=done.wait)  # started before the block: SIGINT unblocked
+    other.start()
+    try:
+        with _ctrl_c_held():
+            for _ in range(20):  # the kernel picks a thread that does not block it
+                os.kill(os.getpid(), signal.SIGINT)
+                time.sleep(0.005)
+            assert received == []
+        assert received == [signal.SIGINT]  # one Ctrl-C held is one delivered
+    finally:
+        done.set()
+        other.join()
+        signal.signal(signal.SIGINT, previous)

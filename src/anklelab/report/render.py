@@ -114,25 +114,28 @@ def _ctrl_c_held() -> Iterator[None]:
     """Ctrl-C held back while workers start: they inherit that from their first instant (the
     initializer would come too late to spare the terminal their tracebacks).
 
-    The signal is blocked, not ignored, where the platform can block it: one that arrives
-    meanwhile is delivered to the command when the workers have started, not lost (an ignored
-    one was, and the command ran to its end). Elsewhere (Windows) it is ignored.
+    Where the platform can block the signal, this thread blocks it, so that the workers it
+    starts are born with it blocked. One that arrives meanwhile is kept and delivered to the
+    command when the workers have started, not lost (an ignored one was, and the command ran to
+    its end). It is kept by a handler of its own, not by the block alone: another thread of the
+    process (the figure starter, a thread pool of the analysis) may take a signal sent to the
+    process, and its handler then runs here at once (a test saw exactly that).
     """
     if threading.current_thread() is not threading.main_thread():
         yield
         return
-    if hasattr(signal, "pthread_sigmask"):
-        previous_mask = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
-        try:
-            yield
-        finally:
-            signal.pthread_sigmask(signal.SIG_SETMASK, previous_mask)
-        return
-    previous = signal.signal(signal.SIGINT, signal.SIG_IGN)
+    arrived: list[int] = []
+    previous = signal.signal(signal.SIGINT, lambda number, frame: arrived.append(number))
+    blocks = hasattr(signal, "pthread_sigmask")
+    mask = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT}) if blocks else None
     try:
         yield
     finally:
+        if mask is not None:  # a signal pending on this thread is taken by the handler above
+            signal.pthread_sigmask(signal.SIG_SETMASK, mask)
         signal.signal(signal.SIGINT, previous)
+        if arrived:
+            signal.raise_signal(signal.SIGINT)
 
 
 class FigureRenderer:
