@@ -166,8 +166,8 @@ def _recording(
     names = header(path, data, required)
     values, line = parse_numeric(path, data, names, nullable)
     columns = dict(zip(names, values, strict=True))
-    whole = np.array([0, values.shape[1]])
-    if not recordings_pass(names, values, whole[:1], whole[1:], required, fs, nullable=nullable):
+    start, length = np.array([0]), np.array([values.shape[1]])  # one recording, whole
+    if not recordings_pass(names, values, start, length, required, fs, nullable=nullable):
         check_recording(str(path), columns, required, fs, line, nullable=nullable)
     return Recording(path.name, columns)
 

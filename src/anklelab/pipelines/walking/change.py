@@ -186,40 +186,37 @@ def _from_neighbours(
     """The neighbours' estimate at each of one direction's ``points`` (in time order), or
     ``None`` where a stiffness it needs has no interval or is not positive. (An absurd
     stiffness, 1e-200 N·m/rad say, gives an infinite variance: the change is undetermined.)"""
-    with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
-        return [_at_point(points, i, times, window_s) for i in range(len(points))]
-
-
-def _at_point(
-    points: list[TimingPoint], i: int, times: NDArray[np.float64], window_s: float
-) -> _Neighbours | None:
-    """:func:`_from_neighbours` at point ``i``."""
     se = np.array([_standard_error(p.stiffness, p.n_perturbed) for p in points])
     k = np.array([p.stiffness.mean for p in points])
-    log_k = np.log(k)
     m = len(points)
-    low, high = max(i - 1, 0), min(i + 1, m - 1)
-    span = times[high] - times[low]
-    known = np.isfinite(se[[low, high]]).all() and np.isfinite(log_k[[low, high]]).all()
-    if not known or span <= 0:
-        return None
-    centre = _weighted_time(points[i], window_s)
-    rate = (log_k[high] - log_k[low]) / span
-    change = _relative_change(rate, window_s, centre)
-    slope = _relative_change_slope(rate, window_s, centre) / span  # per unit of ln k
-    variance = slope**2 * ((se[low] / k[low]) ** 2 + (se[high] / k[high]) ** 2)
-    n_trials = min(points[low].n_perturbed, points[high].n_perturbed)
-    near = np.arange(3) if i == 0 else np.arange(m - 3, m)
-    if m >= 3 and i in (0, m - 1) and np.isfinite(log_k[near]).all():
-        # one-sided: the parabola's slope says what the difference misses
-        curved = _slope_weights(times[near], times[i]) @ log_k[near]
-        parabola = _relative_change(curved, window_s, centre)
-        variance += ((parabola - change) / t_quantile(max(n_trials - 1, 1), 0.975)) ** 2
-    count = min(points[low].stiffness.samples.size, points[high].stiffness.samples.size)
-    rates = np.log(points[high].stiffness.samples[:count])
-    rates = (rates - np.log(points[low].stiffness.samples[:count])) / span
-    samples = _relative_change(rates[np.isfinite(rates)], window_s, centre)
-    return _Neighbours(float(change), float(variance), n_trials, samples)
+    out: list[_Neighbours | None] = []
+    with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
+        log_k = np.log(k)
+        for i, point in enumerate(points):
+            low, high = max(i - 1, 0), min(i + 1, m - 1)
+            span = times[high] - times[low]
+            known = np.isfinite(se[[low, high]]).all() and np.isfinite(log_k[[low, high]]).all()
+            if not known or span <= 0:
+                out.append(None)
+                continue
+            centre = _weighted_time(point, window_s)
+            rate = (log_k[high] - log_k[low]) / span
+            change = _relative_change(rate, window_s, centre)
+            slope = _relative_change_slope(rate, window_s, centre) / span  # per unit of ln k
+            variance = slope**2 * ((se[low] / k[low]) ** 2 + (se[high] / k[high]) ** 2)
+            n_trials = min(points[low].n_perturbed, points[high].n_perturbed)
+            near = np.arange(3) if i == 0 else np.arange(m - 3, m)
+            if m >= 3 and i in (0, m - 1) and np.isfinite(log_k[near]).all():
+                # one-sided: the parabola's slope says what the difference misses
+                curved = _slope_weights(times[near], times[i]) @ log_k[near]
+                parabola = _relative_change(curved, window_s, centre)
+                variance += ((parabola - change) / t_quantile(max(n_trials - 1, 1), 0.975)) ** 2
+            lows, highs = points[low].stiffness.samples, points[high].stiffness.samples
+            count = min(lows.size, highs.size)
+            rates = (np.log(highs[:count]) - np.log(lows[:count])) / span
+            samples = _relative_change(rates[np.isfinite(rates)], window_s, centre)
+            out.append(_Neighbours(float(change), float(variance), n_trials, samples))
+    return out
 
 
 def _relative_change(rate: Any, window_s: float, centre: float) -> Any:
@@ -267,10 +264,11 @@ def pool_changes(
     for direction in dict.fromkeys(p.direction for p in points):
         members = [i for i, p in enumerate(points) if p.direction == direction]
         times = np.array([_time_s(points[i], window_s) for i in members])
-        order = [members[j] for j in np.argsort(times, kind="stable")]
+        ranks = np.argsort(times, kind="stable")
+        order = [members[j] for j in ranks]
         if len(order) < 2:
             continue
-        estimates = _from_neighbours([points[i] for i in order], np.sort(times), window_s)
+        estimates = _from_neighbours([points[i] for i in order], times[ranks], window_s)
         found |= {i: e for i, e in zip(order, estimates, strict=True) if e is not None}
     if not found:
         return points
