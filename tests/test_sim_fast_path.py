@@ -1,8 +1,10 @@
-"""The twin's fast path: its PCHIP equals SciPy's, threads change no bit, and analysing
-recorded data imports neither numba nor the twin (the filter designs: test_signals_iir.py)."""
+"""The twin's fast path: its PCHIP equals SciPy's, its kernel's sine and cosine equal the math
+library's, threads change no bit, and analysing recorded data imports neither numba nor the twin
+(the filter designs: test_signals_iir.py)."""
 
 from __future__ import annotations
 
+import math
 import os
 import subprocess
 import sys
@@ -30,6 +32,15 @@ def test_pchip_equals_scipys(x, y):
     theirs = PchipInterpolator(x, y, extrapolate=False)(at)
     assert np.array_equal(np.isnan(ours), np.isnan(theirs))
     np.testing.assert_allclose(ours, theirs, atol=1e-14, equal_nan=True)
+
+
+def test_the_kernels_cosine_and_sine_are_the_math_librarys_to_one_unit_in_the_last_place():
+    from anklelab.sim._kernels import _cos_sin
+
+    for x in [*np.linspace(-0.3, 0.3, 2001), 1e-300, -0.0, 0.25, np.nextafter(0.25, 1), 2.0]:
+        cos, sin = _cos_sin(x)
+        assert abs(cos - math.cos(x)) <= np.spacing(abs(math.cos(x))), x
+        assert abs(sin - math.sin(x)) <= np.spacing(abs(math.sin(x))), x
 
 
 def test_threads_change_no_bit_of_the_session():

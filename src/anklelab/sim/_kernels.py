@@ -94,22 +94,45 @@ def _rk4_update(s, a, k1, k2, k3, k4):
     )
 
 
+_COS_SERIES = tuple((-1) ** k / math.factorial(2 * k) for k in range(6, -1, -1))
+_SIN_SERIES = tuple((-1) ** k / math.factorial(2 * k + 1) for k in range(5, -1, -1))
+
+
 @njit(cache=True, inline="always")
-def _rhs(s, tau_cmd, gv, pc, fp, shell, th0, fric, c, sn):
+def _cos_sin(x):
+    """``(cos x, sin x)``: by their Taylor series up to ``x¹²`` and ``x¹¹`` where ``|x| <= 0.25``
+    rad (within one unit in the last place of ``math.cos`` and ``math.sin``), by ``math`` beyond.
+
+    With the reciprocals of :func:`run_batch`, this takes a tenth off the kernel's time.
+    """
+    if abs(x) > 0.25:
+        return math.cos(x), math.sin(x)
+    x2 = x * x
+    c = sn = 0.0
+    for a in _COS_SERIES:  # Horner's scheme in x²
+        c = c * x2 + a
+    for a in _SIN_SERIES:
+        sn = sn * x2 + a
+    return c, x * sn
+
+
+@njit(cache=True, inline="always")
+def _rhs(s, tau_cmd, gv, pc, fp, shell, per_step):
     """Derivative of the state ``s = (tau, thm, wm, thh, wh, thf, wf)``.
 
     Returns ``(d, T_A, Lx, Lz)``: the derivative (a 7-tuple), the external dorsiflexing moment
     on the foot about the ankle, and the foot's load on the plate in the sagittal plate frame.
     ``gv`` holds the gait channels, ``pc`` the platform constants and ``fp`` the trial's foot
-    scalars (tuples). While the foot is flat on the plate (``G_CONTACT``) its angles count from
-    ``th0``, the hinge angle at foot flat. The Coulomb friction ``fric`` and the hinge tilt's
-    ``c = cos(thh)``, ``sn = sin(thh)`` are evaluated once per integration step (they change
-    little within one).
+    scalars (tuples). ``per_step`` holds ``(th0, fric, c, sn, inv_jm)``: while the foot is flat
+    on the plate (``G_CONTACT``) its angles count from ``th0``, the hinge angle at foot flat; the
+    Coulomb friction ``fric`` and the hinge tilt's ``c = cos(thh)``, ``sn = sin(thh)`` are
+    evaluated once per integration step (they change little within one); ``inv_jm = 1 / J_M``.
     """
     tau, thm, wm, thh, wh, thf, wf = s
+    th0, fric, c, sn, inv_jm = per_step
     d0 = (tau_cmd - tau) * pc[INV_TC]
     ts = pc[K_S] * (thm - thh) + pc[C_S] * (wm - wh)
-    d2 = (tau - ts - pc[B_M] * wm - fric) / pc[J_M]
+    d2 = (tau - ts - pc[B_M] * wm - fric) * inv_jm
     hinge = ts - pc[B_H] * wh - pc[K_G] * sn
     contact = gv[G_CONTACT]
     ex = fp[F_XA] - pc[X_H]
@@ -210,6 +233,8 @@ def run_batch(
     h = dt / n_sub
     hh = 0.5 * h
     h6 = h / 6.0
+    inv_jm = 1.0 / pc[J_M]  # multiplications, not divisions, in the loop
+    inv_weps = 1.0 / pc[W_EPS]
     foot = flags[FL_FOOT] == 1
     gv = np.zeros(N_G)
     gv1 = np.zeros(N_G)
@@ -318,10 +343,10 @@ def run_batch(
                         th0 = s[3]
                     flat = gv[G_CONTACT] > 0.0
                 g0, gm, g1 = _row8(gv), _row8(gvm), _row8(gv1)
-                fric = pc[T_COUL] * math.tanh(s[2] / pc[W_EPS])
-                cth = math.cos(s[3])
-                sth = math.sin(s[3])
-                k1, ta, lx, lz = _rhs(s, tau_cmd, g0, pc, fpn, shell, th0, fric, cth, sth)
+                fric = pc[T_COUL] * math.tanh(s[2] * inv_weps)
+                cth, sth = _cos_sin(s[3])
+                per_step = (th0, fric, cth, sth, inv_jm)
+                k1, ta, lx, lz = _rhs(s, tau_cmd, g0, pc, fpn, shell, per_step)
                 if q == 0 and plate_phase == 0:
                     if flags[FL_PLATE] == 1:
                         load = _plate_wrench(
@@ -351,9 +376,9 @@ def run_batch(
                         if flags[FL_PLATE] == 1:
                             for c in range(N_WRENCH):
                                 wrench[n, c, r] = w[c]
-                k2 = _rhs(_axpy(s, hh, k1), tau_cmd, gm, pc, fpn, shell, th0, fric, cth, sth)[0]
-                k3 = _rhs(_axpy(s, hh, k2), tau_cmd, gm, pc, fpn, shell, th0, fric, cth, sth)[0]
-                k4 = _rhs(_axpy(s, h, k3), tau_cmd, g1, pc, fpn, shell, th0, fric, cth, sth)[0]
+                k2 = _rhs(_axpy(s, hh, k1), tau_cmd, gm, pc, fpn, shell, per_step)[0]
+                k3 = _rhs(_axpy(s, hh, k2), tau_cmd, gm, pc, fpn, shell, per_step)[0]
+                k4 = _rhs(_axpy(s, h, k3), tau_cmd, g1, pc, fpn, shell, per_step)[0]
                 s = _rk4_update(s, h6, k1, k2, k3, k4)
                 if locked:  # the holding brake holds the motor shaft
                     s = (s[0], lock_angle, 0.0, s[3], s[4], s[5], s[6])
