@@ -14,13 +14,19 @@ Run::
     python -m validation.accuracy --summarise rows.csv [more.csv ...]
 
 Sessions can be cached as HDF5 (``--cache DIR``) so that a change to the analysis is re-scored
-without simulating again.
+without simulating again. The clean-room generator's protocol can be changed from the drawn one
+(``--protocol sample_rate_hz=2000 "timing_points_ms=(150, 300, 450)"``, fields of
+:class:`validation.cleanroom.config.ProtocolConfig`), to check the analysis on protocols other
+than paper 000's.
 """
 
 from __future__ import annotations
 
 import argparse
+import ast
 import csv
+import dataclasses
+import hashlib
 import math
 import multiprocessing
 import sys
@@ -39,42 +45,83 @@ QUANTITIES = {
 CHANGE_SMALL, CHANGE_LARGE = 0.15, 0.25  # the diagnostic's calibration bands (issue 9)
 
 
-def generate(generator: str, kind: str, seed: int) -> Any:
+Protocol = tuple[tuple[str, Any], ...]
+"""Clean-room protocol fields that replace the drawn ones, as ``(name, value)`` pairs."""
+
+
+def generate(generator: str, kind: str, seed: int, protocol: Protocol = ()) -> Any:
     """One session with ground truth from ``generator`` (``twin`` or ``cleanroom``)."""
     if generator == "twin":
         from anklelab.experiments import simulate_randomised
 
+        if protocol:
+            raise SystemExit("error: --protocol: only the cleanroom generator takes it")
         return simulate_randomised(seed, kind=kind, time_courses=False)
     if generator == "cleanroom":
         from validation.cleanroom import draw_config
         from validation.cleanroom import generate as cleanroom_generate
 
-        return cleanroom_generate(draw_config(kind, seed), seed)
+        changes = dict(protocol)
+        rate = changes.pop("sample_rate_hz", 1000.0)  # the draw derives its filters from it
+        config = draw_config(kind, seed, sample_rate_hz=rate)
+        config = dataclasses.replace(
+            config, protocol=dataclasses.replace(config.protocol, **changes)
+        )
+        return cleanroom_generate(config, seed)
     raise SystemExit(f"error: --generator: expected twin or cleanroom, got {generator!r}")
 
 
-def load_or_generate(generator: str, kind: str, seed: int, cache: Path | None) -> Any:
+def parse_protocol(items: Sequence[str]) -> Protocol:
+    """``NAME=VALUE`` items (values as Python literals) as :data:`Protocol` pairs."""
+    from validation.cleanroom.config import ProtocolConfig
+
+    known = {field.name for field in dataclasses.fields(ProtocolConfig)}
+    pairs = []
+    for item in items:
+        name, sep, text = (part.strip() for part in item.partition("="))
+        try:
+            value = ast.literal_eval(text) if sep else None
+        except (ValueError, SyntaxError):
+            sep = ""
+        if not sep or name not in known:
+            raise SystemExit(
+                f"error: --protocol: expected NAME=VALUE, NAME a field of the clean-room "
+                f"protocol ({', '.join(sorted(known))}) and VALUE a Python literal; got {item!r}"
+            )
+        pairs.append((name, value))
+    return tuple(pairs)
+
+
+def load_or_generate(
+    generator: str, kind: str, seed: int, cache: Path | None, protocol: Protocol = ()
+) -> Any:
     """The session, from ``cache`` when it holds it (written there after generating)."""
     from anklelab.data import load_session, save_session
 
-    path = cache / f"{generator}-{kind}-{seed}.h5" if cache else None
+    tag = f"-{hashlib.sha256(repr(protocol).encode()).hexdigest()[:8]}" if protocol else ""
+    path = cache / f"{generator}-{kind}-{seed}{tag}.h5" if cache else None
     if path is not None and path.exists():
         return load_session(path)
-    session = generate(generator, kind, seed)
+    session = generate(generator, kind, seed, protocol)
     if path is not None:
         save_session(session, path)
     return session
 
 
 def session_rows(
-    generator: str, kind: str, seed: int, settings_file: str | None, cache: Path | None
+    generator: str,
+    kind: str,
+    seed: int,
+    settings_file: str | None,
+    cache: Path | None,
+    protocol: Protocol = (),
 ) -> list[dict[str, Any]]:
     """Analyse one session and compare every timing point with its truth."""
     from anklelab.pipelines import analyze_walking, load_walking_settings
 
     t0 = time.perf_counter()
     try:
-        session = load_or_generate(generator, kind, seed, cache)
+        session = load_or_generate(generator, kind, seed, cache, protocol)
         t1 = time.perf_counter()
         results = analyze_walking(session, load_walking_settings(settings_file))
     except Exception as exc:  # a failed session is a row, never silently dropped
@@ -90,6 +137,7 @@ def session_rows(
             "generator": generator,
             "kind": kind,
             "seed": seed,
+            **({"protocol": " ".join(f"{k}={v!r}" for k, v in protocol)} if protocol else {}),
             **draw,
             "direction": tp["direction"],
             "delay_ms": tp["delay_ms"],
@@ -153,7 +201,7 @@ def _draw(truth: dict[str, Any]) -> dict[str, Any]:
     }
 
 
-def _task(args: tuple[str, str, int, str | None, Path | None]) -> list[dict[str, Any]]:
+def _task(args: tuple[str, str, int, str | None, Path | None, Protocol]) -> list[dict[str, Any]]:
     return session_rows(*args)
 
 
@@ -164,9 +212,10 @@ def run(
     settings_file: str | None,
     cache: Path | None,
     workers: int,
+    protocol: Protocol = (),
 ) -> list[dict[str, Any]]:
     """Rows of every session, computed on ``workers`` processes."""
-    tasks = [(generator, kind, seed, settings_file, cache) for seed in seeds]
+    tasks = [(generator, kind, seed, settings_file, cache, protocol) for seed in seeds]
     if cache:
         cache.mkdir(parents=True, exist_ok=True)
     rows: list[dict[str, Any]] = []
@@ -286,6 +335,9 @@ def main(argv: Sequence[str] | None = None) -> None:
     parser.add_argument("--first-seed", type=int, default=0)
     parser.add_argument("--settings", default=None, help="WalkingSettings TOML")
     parser.add_argument("--cache", type=Path, default=None, help="directory of cached sessions")
+    parser.add_argument(
+        "--protocol", nargs="*", default=[], help="clean-room protocol fields NAME=VALUE"
+    )
     parser.add_argument("--workers", type=int, default=2)
     parser.add_argument("--out", type=Path, default=None, help="CSV of the rows")
     parser.add_argument("--summarise", type=Path, nargs="*", help="summarise these row files")
@@ -294,7 +346,8 @@ def main(argv: Sequence[str] | None = None) -> None:
         print(summarise(read_rows(args.summarise)))
         return
     seeds = range(args.first_seed, args.first_seed + args.sessions)
-    rows = run(args.generator, args.kind, seeds, args.settings, args.cache, args.workers)
+    protocol = parse_protocol(args.protocol)
+    rows = run(args.generator, args.kind, seeds, args.settings, args.cache, args.workers, protocol)
     if args.out:
         write_rows(args.out, rows)
     print(summarise(rows))

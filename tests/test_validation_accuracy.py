@@ -1,0 +1,32 @@
+"""The accuracy harness: protocols other than the drawn one reach the clean-room generator, and
+a malformed protocol item is named before any session is generated."""
+
+from __future__ import annotations
+
+import pytest
+from validation.accuracy import generate, parse_protocol
+
+
+def test_a_changed_protocol_reaches_the_clean_room_session():
+    protocol = parse_protocol(
+        ["sample_rate_hz=2000", "timing_points_ms=(150.0, 300.0)", "onset_jitter_sd_s=(0.003, 0.004)"]
+        + ["trials_per_point=2", "n_unperturbed=3", "n_calibration=1"]
+    )
+    session = generate("cleanroom", "nominal", 100, protocol)
+    assert session.info.sample_rate_hz == 2000.0
+    assert len(session.walking) == 2 * 2 + 3
+    assert {t.delay_ms for t in session.walking if t.perturbed} == {150.0, 300.0}
+    assert sorted(session.truth["reference"]["dorsi"]) <= ["150", "300"]
+
+
+@pytest.mark.parametrize(
+    "item", ["trials_per_point", "trials_per_pont=3", "ramp_s=fast", "=0.05", "ramp_s=(0.05"]
+)
+def test_a_malformed_protocol_item_is_named(item):
+    with pytest.raises(SystemExit, match=rf"--protocol: .*got '{item.replace('(', '[(]')}'"):
+        parse_protocol([item])
+
+
+def test_the_twin_takes_no_protocol():
+    with pytest.raises(SystemExit, match="only the cleanroom generator"):
+        generate("twin", "random", 0, (("ramp_s", 0.05),))
