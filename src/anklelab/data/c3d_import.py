@@ -292,12 +292,11 @@ def _label(row: dict[str, str], path: Path) -> str:
 def _walking(c3d: C3DFile, row: dict[str, str], recording: Recording) -> WalkingTrial:
     where = row["_where"]
     perturbed = _flag(row.get("perturbed", ""), where, "perturbed")
-    direction = row.get("direction", "").lower()
     delay = _float(row.get("delay_ms", ""), where, "delay_ms", empty_ok=True)
-    check_walking_row(where, perturbed, direction, delay)
+    direction = check_walking_row(where, perturbed, row.get("direction", "").lower(), delay)
     known = {"file", "role", "label", "perturbed", "direction", "delay_ms", "distance_m", "_where"}
     extra = {k: v for k, v in row.items() if k not in known}
-    return WalkingTrial(_label(row, c3d.path), recording, perturbed, direction, delay, extra)  # type: ignore[arg-type]
+    return WalkingTrial(_label(row, c3d.path), recording, perturbed, direction, delay, extra)
 
 
 def import_c3d(directory: str | Path, mapping: str | Path, *, workers: int = 2) -> Session:

@@ -377,5 +377,5 @@ def _walking_trial(
             f"walking.path {group.path!r}: a perturbed group needs a delay (the {{delay_ms}} "
             "wildcard or delay_ms = ...)"
         )
-    check_walking_row(where, True, direction, float(delay))
-    return WalkingTrial(label, rec, True, direction, float(delay))  # type: ignore[arg-type]
+    checked = check_walking_row(where, True, direction, float(delay))
+    return WalkingTrial(label, rec, True, checked, float(delay))
