@@ -143,7 +143,8 @@ def _entries_from_csv(root: Path, table: TrialsFromCsv) -> list[Entry]:
                 f"{path}: header (line 1) lacks the column {column!r}; expected file, role and "
                 "(walking) perturbed, direction, delay_ms, (bench) distance_m, optionally label"
             )
-    entries, seen = [], {}
+    entries = []
+    seen: dict[str, int] = {}
     for line, fields in enumerate(rows[1:], start=2):
         if not any(f.strip() for f in fields):
             continue
@@ -393,6 +394,11 @@ def _import(root: Path, mapping: Path, spec: C3DMapping, workers: int) -> Sessio
 
 
 def _same_plate(a: dict[str, object], b: dict[str, object]) -> bool:
-    return a.keys() == b.keys() and all(
-        np.isclose(a[k], b[k], atol=1e-6) if isinstance(a[k], float) else a[k] == b[k] for k in a
-    )
+    return a.keys() == b.keys() and all(_same_value(a[k], b[k]) for k in a)
+
+
+def _same_value(x: object, y: object) -> bool:
+    """Equal; two floats (a plate's geometry, m) within 1e-6 of each other."""
+    if isinstance(x, float) and isinstance(y, float):
+        return bool(np.isclose(x, y, atol=1e-6))
+    return x == y
