@@ -109,7 +109,7 @@ def reap_temporaries(directory: str | os.PathLike[str]) -> list[Path]:
     process elsewhere cannot be checked). Returns the paths removed; errors are ignored (a
     temporary that cannot be removed now is tried again next time).
     """
-    removed = []
+    removed: list[Path] = []
     try:
         entries = list(os.scandir(directory))
     except OSError:

@@ -133,7 +133,9 @@ class _LinearPlate(Parameters):
         grf = -force @ rotation.T
         position = cop @ rotation.T
         free = res.mz - res.ax * res.fy + res.ay * res.fx
-        return LabLoad(*np.moveaxis(grf, -1, 0), *np.moveaxis(position, -1, 0)[:2], free)
+        grf_x, grf_y, grf_z = np.moveaxis(grf, -1, 0)
+        cop_x, cop_y = np.moveaxis(position, -1, 0)[:2]
+        return LabLoad(grf_x, grf_y, grf_z, cop_x, cop_y, free)
 
 
 class PlateGeometry(_LinearPlate):
@@ -252,9 +254,9 @@ class GrfCopPlate(Parameters):
         grf = c[..., :3] @ rotation.T
         cop = c[..., 3:5] - np.asarray(self.plate_centre_m)
         cop = np.concatenate([cop, np.zeros_like(c[..., :1])], axis=-1) @ rotation.T
-        return LabLoad(
-            *np.moveaxis(grf, -1, 0), *np.moveaxis(cop, -1, 0)[:2], np.full(c.shape[:-1], np.nan)
-        )
+        grf_x, grf_y, grf_z = np.moveaxis(grf, -1, 0)
+        cop_x, cop_y = np.moveaxis(cop, -1, 0)[:2]
+        return LabLoad(grf_x, grf_y, grf_z, cop_x, cop_y, np.full(c.shape[:-1], np.nan))
 
 
 ForcePlate = PlateGeometry | SixAxisPlate | GrfCopPlate
@@ -282,7 +284,7 @@ def plate_class(type_name: str) -> type[ForcePlate]:
         ) from None
 
 
-def _check_count(n: int, plate: ForcePlate, axis: int) -> None:
+def _check_count(n: int, plate: _LinearPlate | GrfCopPlate, axis: int) -> None:
     if n != len(plate.channels):
         raise ParameterError(
             f"channels: expected {len(plate.channels)} channels on axis {axis} for a "
@@ -339,7 +341,7 @@ class LabLoad:
 
 def resultants(
     channels: ArrayLike,
-    geometry: PlateGeometry | SixAxisPlate,
+    geometry: _LinearPlate,
     *,
     min_fz_n: float = DEFAULT_MIN_FZ_N,
     axis: int = -2,
@@ -489,7 +491,7 @@ def sagittal_load(res: Resultants, anterior_axis: AnteriorAxis = "+x") -> Sagitt
     )
 
 
-def sagittal_matrix(geometry: ForcePlate) -> NDArray[np.float64]:
+def sagittal_matrix(geometry: _LinearPlate | GrfCopPlate) -> NDArray[np.float64]:
     """The ``(3, n_signals)`` map from a plate's load signals to :data:`SAGITTAL_SIGNALS`,
     ``(grf_x, grf_z, grf_z * cop_x)`` in the walking frame.
 

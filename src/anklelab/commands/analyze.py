@@ -182,6 +182,7 @@ def analyze(
         def draw_filters(fitted: PlatformFilters) -> None:
             from anklelab.report.figures_walking import submit_filters_figure
 
+            assert renderer is not None  # called only when figures are drawn
             early.append(submit_filters_figure(fitted, renderer))
 
         with warnings.catch_warnings():  # its warnings are printed below, with the summary

@@ -58,8 +58,8 @@ def batch(
             workers=workers, retries=retries, figures=figures, progress=task("sessions"),
         )  # fmt: skip
         run.settings.update(settings.model_dump(mode="json"), figures=figures)
-        for path, sha256 in result.inputs.items():
-            run.add_input(Path(path), sha256)
+        for source, sha256 in result.inputs.items():
+            run.add_input(Path(source), sha256)
         run.add_input(settings_file)
     n_subjects = result.group.loc[result.group["status"] == "ok", "subject"].nunique()
     typer.echo(

@@ -210,6 +210,7 @@ def perturberator(
     for column in ("direction", "delay (ms)", "trials", "cop (m)", "stiffness (N·m/rad)",
                    "onset sd (ms)"):  # fmt: skip
         table.add_column(column, justify="right")
+    assert session.truth is not None  # simulate_perturberator always records the truth
     for direction, points in session.truth["reference"].items():
         for delay, ref in points.items():
             table.add_row(

@@ -150,7 +150,7 @@ class TerrainProfile:
         the ends.
         """
         gradient = np.gradient(self.height_m, self.distance_m)
-        return np.arctan(np.interp(distance_m, self.distance_m, gradient))
+        return np.arctan(np.interp(np.asarray(distance_m), self.distance_m, gradient))
 
     def equilibrium(self, duration_s: float, fs: float, speed_m_s: float) -> NDArray[np.float64]:
         """Platform equilibrium angle (rad) for a walk at ``speed_m_s``, sampled at ``fs`` Hz."""

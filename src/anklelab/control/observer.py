@@ -19,7 +19,7 @@ the estimate is off by at most ``r_c T_s``. The friction model is evaluated at t
 from __future__ import annotations
 
 import math
-from typing import NamedTuple
+from typing import NamedTuple, cast
 
 import numpy as np
 from numba import njit
@@ -129,7 +129,8 @@ def observer_constants(
         bd=np.ascontiguousarray(bd[:, 0]),
         cd=np.ascontiguousarray(cd),
         dd=np.ascontiguousarray(dd[:, 0]),
-        rest=np.linalg.solve(np.eye(2) - ad, bd[:, 0]),
+        # float64 in, float64 out (NumPy's stubs type solve's result as any floating type)
+        rest=cast("NDArray[np.float64]", np.linalg.solve(np.eye(2) - ad, bd[:, 0])),
         inertia=inertia_kgm2,
         fs=fs,
         **model_fields(params, f, smoothing_speed_rad_s),

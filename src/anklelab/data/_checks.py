@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable, Iterable, Mapping, Sequence
-from typing import Any
+from typing import Any, TypeGuard
 
 import numpy as np
 from numpy.typing import NDArray
@@ -25,6 +25,7 @@ from anklelab.data.session import (
     SESSION_FORMAT,
     WALKING_MANIFEST_COLUMNS,
     BenchTest,
+    Direction,
     Recording,
     Session,
     SessionInfo,
@@ -451,9 +452,14 @@ def check_recordings(
 # --- manifests ----------------------------------------------------------------------------------
 
 
-def check_walking_row(where: str, perturbed: bool, direction: str, delay_ms: float) -> None:
-    """Consistency of one manifest row; ``where`` names the file and row."""
-    if direction not in DIRECTIONS:
+def _is_direction(text: str) -> TypeGuard[Direction]:
+    return text in DIRECTIONS
+
+
+def check_walking_row(where: str, perturbed: bool, direction: str, delay_ms: float) -> Direction:
+    """Consistency of one manifest row; ``where`` names the file and row. Returns
+    ``direction``, checked to be one of :data:`~anklelab.data.session.DIRECTIONS`."""
+    if not _is_direction(direction):
         raise SessionFormatError(
             f"{where}, column 'direction': got {excerpt(direction)}; expected one of "
             f"{', '.join(DIRECTIONS)}"
@@ -480,6 +486,7 @@ def check_walking_row(where: str, perturbed: bool, direction: str, delay_ms: flo
                 f"{where}, column 'delay_ms': an unperturbed trial (perturbed = 0) needs an "
                 f"empty delay, got {delay_ms!r}"
             )
+    return direction
 
 
 def check_unique(items: Iterable[tuple[Any, str]], what: str, file: str) -> None:

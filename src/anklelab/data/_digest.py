@@ -63,7 +63,7 @@ def update(digest: Any, value: Any) -> None:
     elif isinstance(value, np.ndarray):
         array = np.ascontiguousarray(value, dtype=value.dtype.newbyteorder("<"))
         update_array_header(digest, array.dtype, array.shape)
-        digest.update(memoryview(array.reshape(-1)).cast("B"))
+        digest.update(array.reshape(-1).data.cast("B"))
     else:
         raise TypeError(f"cannot hash a value of type {type(value).__name__}")
 

@@ -26,7 +26,7 @@ import time
 from collections.abc import Callable, Sequence
 from multiprocessing.connection import wait
 from pathlib import Path
-from typing import Any, TypeVar
+from typing import IO, Any, TypeVar
 
 __all__ = ["IsolatedFailure", "map_isolated"]
 
@@ -50,6 +50,12 @@ def _start(script: Path, function: str) -> subprocess.Popen[bytes]:
         stdout=subprocess.PIPE,
         stderr=subprocess.DEVNULL,
     )
+
+
+def _channel(process: subprocess.Popen[bytes]) -> IO[bytes]:
+    """The pipe a worker's replies come on (:func:`_start` always opens it)."""
+    assert process.stdout is not None
+    return process.stdout
 
 
 def map_isolated(
@@ -108,13 +114,14 @@ def map_isolated(
                     busy[w] = (index, time.monotonic() + limit(item))
             deadline = min(due for _, due in busy.values())
             ready = wait(
-                [pool[w].stdout for w in busy], timeout=max(0.0, deadline - time.monotonic())
+                [_channel(pool[w]).fileno() for w in busy],
+                timeout=max(0.0, deadline - time.monotonic()),
             )
             for w, (index, due) in list(busy.items()):
                 process = pool[w]
-                if process.stdout in ready:
+                if _channel(process).fileno() in ready:
                     try:
-                        results[index] = pickle.load(process.stdout)  # type: ignore[arg-type]
+                        results[index] = pickle.load(_channel(process))
                     except (EOFError, pickle.UnpicklingError):
                         code = process.wait()
                         raise IsolatedFailure(

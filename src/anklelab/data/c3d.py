@@ -216,19 +216,19 @@ def read_c3d_files(paths: Sequence[str | Path], *, workers: int = 2) -> list[C3D
         Naming the file and the parameter for the first file that is missing, malformed or
         describes its force platforms inconsistently.
     """
-    paths = [Path(p) for p in paths]
-    for path in paths:
+    files = [Path(p) for p in paths]
+    for path in files:
         if not path.is_file():
             raise SessionFormatError(f"{path}: no such file")
     try:
-        loaded = map_isolated(_WORKER, "load", paths, workers=workers, timeout_s=_timeout)
+        loaded = map_isolated(_WORKER, "load", files, workers=workers, timeout_s=_timeout)
     except IsolatedFailure as exc:
         raise SessionFormatError(
             f"{exc.item}: cannot read as C3D: {exc.reason} (the file is corrupt)"
         ) from None
     except ValueError as exc:  # the worker's report of a malformed file
         raise SessionFormatError(str(exc)) from None
-    return [_build(path, data) for path, data in zip(paths, loaded, strict=True)]
+    return [_build(path, data) for path, data in zip(files, loaded, strict=True)]
 
 
 def read_c3d(path: str | Path) -> C3DFile:

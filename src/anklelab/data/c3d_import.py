@@ -143,7 +143,8 @@ def _entries_from_csv(root: Path, table: TrialsFromCsv) -> list[Entry]:
                 f"{path}: header (line 1) lacks the column {column!r}; expected file, role and "
                 "(walking) perturbed, direction, delay_ms, (bench) distance_m, optionally label"
             )
-    entries, seen = [], {}
+    entries = []
+    seen: dict[str, int] = {}
     for line, fields in enumerate(rows[1:], start=2):
         if not any(f.strip() for f in fields):
             continue
@@ -292,12 +293,11 @@ def _label(row: dict[str, str], path: Path) -> str:
 def _walking(c3d: C3DFile, row: dict[str, str], recording: Recording) -> WalkingTrial:
     where = row["_where"]
     perturbed = _flag(row.get("perturbed", ""), where, "perturbed")
-    direction = row.get("direction", "").lower()
     delay = _float(row.get("delay_ms", ""), where, "delay_ms", empty_ok=True)
-    check_walking_row(where, perturbed, direction, delay)
+    direction = check_walking_row(where, perturbed, row.get("direction", "").lower(), delay)
     known = {"file", "role", "label", "perturbed", "direction", "delay_ms", "distance_m", "_where"}
     extra = {k: v for k, v in row.items() if k not in known}
-    return WalkingTrial(_label(row, c3d.path), recording, perturbed, direction, delay, extra)  # type: ignore[arg-type]
+    return WalkingTrial(_label(row, c3d.path), recording, perturbed, direction, delay, extra)
 
 
 def import_c3d(directory: str | Path, mapping: str | Path, *, workers: int = 2) -> Session:
@@ -394,6 +394,11 @@ def _import(root: Path, mapping: Path, spec: C3DMapping, workers: int) -> Sessio
 
 
 def _same_plate(a: dict[str, object], b: dict[str, object]) -> bool:
-    return a.keys() == b.keys() and all(
-        np.isclose(a[k], b[k], atol=1e-6) if isinstance(a[k], float) else a[k] == b[k] for k in a
-    )
+    return a.keys() == b.keys() and all(_same_value(a[k], b[k]) for k in a)
+
+
+def _same_value(x: object, y: object) -> bool:
+    """Equal; two floats (a plate's geometry, m) within 1e-6 of each other."""
+    if isinstance(x, float) and isinstance(y, float):
+        return bool(np.isclose(x, y, atol=1e-6))
+    return x == y

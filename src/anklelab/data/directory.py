@@ -282,9 +282,8 @@ def _walking_rows(reader: SessionReader, folder: Path) -> list[Row]:
     ):
         trial = _label(row["trial"], where, "trial")
         perturbed = _flag(row["perturbed"], where, "perturbed")
-        direction = row["direction"].lower()
         delay = _float(row["delay_ms"], where, "delay_ms", empty_ok=True)
-        check_walking_row(where, perturbed, direction, delay)
+        direction = check_walking_row(where, perturbed, row["direction"].lower(), delay)
         ids.append((trial, line))
         make = partial(
             WalkingTrial,

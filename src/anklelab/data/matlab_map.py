@@ -233,7 +233,7 @@ def _recording(
         if column not in specs and column != "time_s":
             raise ParameterError(f"columns.{column}: required column is not mapped")
     values = {c: _column(fields, specs[c], c, where) for c in specs}
-    arrays = [v for v in values.values() if np.ndim(v) == 1]
+    arrays = [v for v in values.values() if isinstance(v, np.ndarray) and v.ndim == 1]
     if not arrays:
         raise SessionFormatError(f"{where}: no mapped field holds a signal")
     n = max(a.size for a in arrays)
@@ -243,7 +243,10 @@ def _recording(
     stacked = np.stack(arrays)
     finite = np.flatnonzero(~np.isnan(stacked).all(axis=0))
     n = int(finite[-1]) + 1 if finite.size else 0  # drop NaN padding at the end
-    columns = {c: (v[:n] if np.ndim(v) == 1 else np.full(n, float(v))) for c, v in values.items()}
+    columns = {
+        c: (v[:n] if isinstance(v, np.ndarray) and v.ndim == 1 else np.full(n, float(v)))
+        for c, v in values.items()
+    }
     columns.setdefault("time_s", np.arange(n) / fs)
     return Recording(name, {"time_s": columns.pop("time_s"), **columns})
 
@@ -377,5 +380,5 @@ def _walking_trial(
             f"walking.path {group.path!r}: a perturbed group needs a delay (the {{delay_ms}} "
             "wildcard or delay_ms = ...)"
         )
-    check_walking_row(where, True, direction, float(delay))
-    return WalkingTrial(label, rec, True, direction, float(delay))  # type: ignore[arg-type]
+    checked = check_walking_row(where, True, direction, float(delay))
+    return WalkingTrial(label, rec, True, checked, float(delay))

@@ -29,7 +29,7 @@ import math
 from collections.abc import Callable
 from dataclasses import asdict, dataclass
 from pathlib import Path
-from typing import Any, Literal
+from typing import Any, Literal, TypedDict
 
 import numpy as np
 from pydantic import Field
@@ -83,7 +83,17 @@ COMPENSATIONS = ("none", "gravity + friction")
 OBSERVER_TASKS: tuple[Literal["hold", "track"], ...] = ("hold", "track")
 """The platform holds level, or tracks a slow multisine, while the user pushes."""
 CHIRP_DEG = 5.0
-CHIRP = {"f0_hz": 0.2, "f1_hz": 5.0, "duration_s": 10.0}
+
+
+class _Chirp(TypedDict):
+    """The chirp's keyword arguments of :func:`~anklelab.experiments.capstan.chirp_tracking`."""
+
+    f0_hz: float
+    f1_hz: float
+    duration_s: float
+
+
+CHIRP: _Chirp = {"f0_hz": 0.2, "f1_hz": 5.0, "duration_s": 10.0}
 """Paper 001's chirp (Fig. 5): 5 deg, 0.2 to 5 Hz over 10 s."""
 PRE_S = 0.2  # rest before each set-point step, s (experiments.capstan.step_response's default)
 

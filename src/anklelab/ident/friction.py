@@ -270,6 +270,7 @@ class FrictionIdentifier(Estimator):
             for _ in range(self.iterations):
                 self._fit_inertia(data.chirp, fs, ts, ws)
                 ts, ws = self._fit_low_speed(coasts, data.spindown, fs)
+            assert ws is not None  # iterations >= 1 (validated above)
             if min_speed >= 3.5 * ws:
                 break
             min_speed = 3.5 * ws

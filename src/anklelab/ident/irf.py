@@ -67,6 +67,11 @@ def _as_batch(x: ArrayLike, name: str) -> NDArray[np.float64]:
     return x
 
 
+def _centred(x: NDArray[np.float64]) -> NDArray[np.float64]:
+    """Each record minus its mean over time."""
+    return x - x.mean(axis=-1, keepdims=True)
+
+
 _POSITIVE_INT = interval(1, integer=True)
 _METHOD = [one_of("pinv", "toeplitz")]
 
@@ -166,8 +171,8 @@ class ImpulseResponse(Estimator):
                 f"u, y: leading axes and n_times must match, got {u.shape} and {y.shape}"
             )
         n_in, n_out, n_lags = u.shape[-2], y.shape[-2], max(lags)
-        u = u - u.mean(axis=-1, keepdims=True)
-        y = y - y.mean(axis=-1, keepdims=True)
+        u = _centred(u)
+        y = _centred(y)
         scale = np.sqrt((u**2).mean(axis=(*range(u.ndim - 2), -1)))
         if np.any(scale == 0):
             raise ParameterError("u: an input is constant; it cannot drive a filter")

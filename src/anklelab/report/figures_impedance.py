@@ -19,6 +19,7 @@ from collections.abc import Sequence
 from typing import TYPE_CHECKING, Any, Literal, NamedTuple
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from anklelab.ident.bench import interpolate_stiffness
 from anklelab.pipelines.walking.results import QUANTITIES as _ALL
@@ -113,7 +114,7 @@ def interval_kind(points: Sequence[TimingPoint]) -> str:
     return f"{CI95}; {SD95} where the results give no CI"
 
 
-def bench_at(results: WalkingResults, cop_m: Sequence[float]) -> np.ndarray | None:
+def bench_at(results: WalkingResults, cop_m: ArrayLike) -> np.ndarray | None:
     """Bench stiffness interpolated at each lever arm (N·m/rad); None without bench tests."""
     rows = sorted(results.bench)
     return interpolate_stiffness(rows, np.asarray(cop_m, dtype=float)) if rows else None
@@ -272,8 +273,8 @@ def impedance_figure(
     fig.supxlabel(xlabel, fontsize="medium", y=0.02)
     if handles:
         columns = min(3, len(handles))
-        rows = 1 + math.ceil(len(handles) / columns)  # the title, then the entries
-        set_top_margin(axes, Margins.top + rows * SMALL_LINE_IN + 0.25)  # titles padded
+        legend_rows = 1 + math.ceil(len(handles) / columns)  # the title, then the entries
+        set_top_margin(axes, Margins.top + legend_rows * SMALL_LINE_IN + 0.25)  # titles padded
         fig.legend(
             list(handles.values()),
             list(handles),

@@ -32,7 +32,7 @@ import pickle
 import signal
 import sys
 import threading
-from collections.abc import Callable, Iterator, Sequence
+from collections.abc import Callable, Iterator, Mapping, Sequence
 from concurrent.futures import CancelledError, Future, ProcessPoolExecutor
 from concurrent.futures.process import BrokenProcessPool
 from contextlib import contextmanager
@@ -280,7 +280,7 @@ class PendingFigures:
         renderer: FigureRenderer,
         draw: Callable[[Any, str], Any],
         data: Any,
-        tasks: dict[str, Future[bytes] | None],
+        tasks: Mapping[str, Future[bytes] | None],
     ) -> None:
         self._renderer, self._draw, self._data, self._tasks = renderer, draw, data, tasks
 

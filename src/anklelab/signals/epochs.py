@@ -11,6 +11,7 @@ tag of the key.
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
+from typing import SupportsIndex
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -135,7 +136,10 @@ class Trials:
         names, inverse = np.unique(self.metadata["condition"].astype(str), return_inverse=True)
         return np.array([tags <= set(name.split("/")) for name in names], dtype=bool)[inverse]
 
-    def __getitem__(self, key: str | int | slice | ArrayLike) -> Trials:
+    def __getitem__(
+        self,
+        key: str | SupportsIndex | slice | Sequence[int] | NDArray[np.integer | np.bool_],
+    ) -> Trials:
         """Trials matching condition tags (``"dorsi/225"``), or by position/boolean mask."""
         if isinstance(key, str):
             return self._subset(np.flatnonzero(self._match(key)))

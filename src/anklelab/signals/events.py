@@ -31,7 +31,9 @@ class Onsets(NamedTuple):
         Signed peak excursion of the angle after ``start``, rad (positive: dorsiflexion).
     """
 
-    index: NDArray[np.float64]
+    # a field named ``index`` shadows ``tuple.index``, which mypy reports as an incompatible
+    # override; the field is public API (``onsets.index``), so it keeps its name
+    index: NDArray[np.float64]  # type: ignore[assignment]
     amplitude: NDArray[np.float64]
 
 

@@ -9,7 +9,7 @@ from numpy.typing import NDArray
 
 from anklelab.data.session import Recording, Session
 from anklelab.errors import ParameterError, SessionFormatError
-from anklelab.forceplate import ForcePlate
+from anklelab.forceplate import ForcePlate, GrfCopPlate
 from anklelab.ident.irf import PlatformFilters
 from anklelab.pipelines.walking.settings import WalkingSettings
 from anklelab.signals import advance, lowpass_min_samples
@@ -127,7 +127,7 @@ def uncorrected_moment(session: Session) -> list[str]:
     plate = session.info.force_plate
     column = "cop_x_m" if plate.anterior_axis[1] == "x" else "cop_y_m"
     cop = [rec[column] for rec in session.calibration if column in rec.columns]
-    if plate.type != "grf_cop" or not cop:
+    if not isinstance(plate, GrfCopPlate) or not cop:
         return []
     empty = float(np.mean(np.isnan(np.concatenate(cop))))
     if empty <= 0.1:

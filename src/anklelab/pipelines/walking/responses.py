@@ -18,6 +18,8 @@ of 1e6 N is dropped earlier, by the stance: its vertical force rings far below z
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import partial
+from typing import cast
 
 import numpy as np
 from numpy.typing import NDArray
@@ -129,7 +131,8 @@ def outliers(data: NDArray[np.float64], limit: float) -> NDArray[np.bool_]:
     spread = _MAD_TO_SD * np.median(np.abs(data - median), axis=0)
     typical = np.median(spread, axis=-1, keepdims=True)
     scale = np.maximum(spread, np.maximum(typical, np.finfo(float).tiny))
-    return (np.abs(data - median) / scale > limit).any(axis=(1, 2))
+    # one flag per trial: ``any`` over the channel and time axes of a 3-D array is 1-D
+    return cast("NDArray[np.bool_]", (np.abs(data - median) / scale > limit).any(axis=(1, 2)))
 
 
 def condition_responses(
@@ -162,15 +165,14 @@ def condition_responses(
     explained = 0.0
     if settings.covariate_adjustment:
         raw = [stance.ch_names.index(name) for name in FEATURE_CHANNELS]
-        options = {
-            "span_ms": settings.adjustment_span_ms,
-            "guard_ms": settings.adjustment_guard_ms,
-            "n_bins": settings.adjustment_bins,
-        }
-        features_u = pre_onset_features(
-            unperturbed.data[:, raw], nominal[raw], median_onset, fs, **options
+        features = partial(
+            pre_onset_features,
+            span_ms=settings.adjustment_span_ms,
+            guard_ms=settings.adjustment_guard_ms,
+            n_bins=settings.adjustment_bins,
         )
-        features_p = pre_onset_features(group.data[:, raw], nominal[raw], onset, fs, **options)
+        features_u = features(unperturbed.data[:, raw], nominal[raw], median_onset, fs)
+        features_p = features(group.data[:, raw], nominal[raw], onset, fs)
         adjustment = fit_adjustment(features_u, baseline)
         response = response - adjustment.predict(features_p)
         baseline = baseline - adjustment.predict(features_u)

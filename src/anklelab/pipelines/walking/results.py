@@ -9,6 +9,7 @@ follow it.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any, NamedTuple
 
@@ -57,7 +58,7 @@ SLOPE = Quantity("stiffness_slope", "stiffness_slope_nm_per_rad_per_s", "N·m/ra
 CHANGE = Quantity("stiffness_change", "stiffness_change_fraction", "", "Δk/k", ".2f")
 
 
-def sd(values: NDArray[np.float64]) -> float:
+def sd(values: Sequence[float] | NDArray[np.float64]) -> float:
     """Sample standard deviation (0 for fewer than two values)."""
     return float(np.std(values, ddof=1)) if np.size(values) > 1 else 0.0
 
@@ -249,7 +250,10 @@ class TimingPoint:
                 n_perturbed=int(node.get("n_perturbed", 0)),
                 n_unperturbed=int(node.get("n_unperturbed", 0)),
                 cop_m=_float(node.get("cop_m")),
-                **estimates,
+                stiffness=estimates["stiffness"],
+                damping=estimates["damping"],
+                inertia=estimates["inertia"],
+                vaf=estimates["vaf"],
                 stiffness_model=str(node.get("stiffness_model", "constant")),
                 stiffness_change=Estimate.from_dict(change, f"{where}.{CHANGE.key}")
                 if change

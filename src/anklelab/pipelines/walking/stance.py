@@ -80,7 +80,7 @@ def _first_reasons(
     """
     log: list[tuple[str, ...]] = [()] * n
     for mask, reason in checks:
-        for i in np.flatnonzero(mask):
+        for i in np.flatnonzero(mask).tolist():
             log[i] = log[i] or (reason if isinstance(reason, str) else reason[i],)
     return log
 
