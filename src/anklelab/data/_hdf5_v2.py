@@ -69,7 +69,7 @@ def layout_digest(names: tuple[str, ...], values: np.ndarray) -> str:
     digest = hashlib.sha256()
     update(digest, names)
     update_array_header(digest, values.dtype, values.shape)
-    digest.update(values)
+    digest.update(values.data)
     return digest.hexdigest()
 
 
@@ -131,7 +131,7 @@ def _stored_section(
     files = _column(columns, "file", None, f"{where}/manifest")
     if not isinstance(files, tuple):
         raise SessionFormatError(f"{where}/manifest/file: expected text (recording names)")
-    manifest = {"file": files}
+    manifest: dict[str, tuple[str, ...] | np.ndarray] = {"file": files}
     for key in MANIFEST[name][1:]:
         manifest[key] = _column(columns, key, len(files), f"{where}/manifest")
     layouts = []
@@ -264,10 +264,9 @@ def _walking(
             raise SessionFormatError(
                 f"{row}: manifest 'perturbed' must be 0 or 1 and 'direction' text"
             )
-        trial = WalkingTrial(
-            label, recording, bool(perturbed), direction, float(delay), _extra(extra, row)
-        )  # type: ignore[arg-type]
-        check_walking_row(row, trial.perturbed, trial.direction, trial.delay_ms)
+        extras = _extra(extra, row)
+        checked = check_walking_row(row, bool(perturbed), direction, float(delay))
+        trial = WalkingTrial(label, recording, bool(perturbed), checked, float(delay), extras)
         walking.append((trial, f"row {i + 1}"))
     check_walking_trials(f"{where}/manifest", walking)
     return tuple(t for t, _ in walking)

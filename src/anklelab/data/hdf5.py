@@ -123,7 +123,7 @@ def _write_layout(group: h5py.Group, columns: tuple[str, ...], recordings: list[
         for j, name in enumerate(columns):
             row = np.concatenate([np.asarray(r.columns[name], dtype="<f8") for r in recordings])
             dataset[j] = row
-            hashing.submit(digest.update, row)
+            hashing.submit(digest.update, row.data)
     return digest.hexdigest()
 
 

@@ -464,7 +464,8 @@ def _run_walking(
     updates = setup.plan.update_times(n / setup.fs)
     per_sample = round(p.servo.velocity_loop_rate_hz / setup.fs)
     width = round(walk.window_ms * setup.fs / 1000) + 4 * MARGIN
-    out = _WalkingRun(*(np.zeros((n_trials, n)) for _ in range(3)), np.zeros((n_trials, 6, n)),
+    motor, angle, torque = (np.zeros((n_trials, n)) for _ in range(3))
+    out = _WalkingRun(motor, angle, torque, np.zeros((n_trials, 6, n)),
                       np.zeros((n_trials, n)), np.zeros((n_trials, n)))  # fmt: skip
     for start in range(0, n_trials, BATCH):
         b = slice(start, min(start + BATCH, n_trials))
@@ -537,7 +538,7 @@ def _walking(
     recorded_angle = goniometer_reading(true_angle, p, art, rng)
     walking = tuple(
         WalkingTrial(
-            trial=i + 1,
+            trial=str(i + 1),
             recording=Recording(
                 f"trial_{i + 1:04d}.csv",
                 {"time_s": time, "motor_angle": recorded_motor[i], "ankle_angle": recorded_angle[i]}
@@ -670,6 +671,6 @@ def _bench(
                 {"time_s": time, "displacement_m": displacement,
                  "force_n": load_cell_reading(force, p, art, rng)},
             )  # fmt: skip
-            tests.append(BenchTest(number, rec, float(distance)))
+            tests.append(BenchTest(str(number), rec, float(distance)))
     advance(len(tests))
     return tuple(tests), {"distances_m": distances, "stiffness_nm_per_rad": law}

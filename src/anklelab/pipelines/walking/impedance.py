@@ -44,7 +44,12 @@ import numpy as np
 from numpy.typing import NDArray
 
 from anklelab._student_t import t_quantile
-from anklelab.ident.impedance import ImpedanceFit, fit_impedance, impedance_torque
+from anklelab.ident.impedance import (
+    ImpedanceFit,
+    StiffnessModel,
+    fit_impedance,
+    impedance_torque,
+)
 from anklelab.pipelines.walking.change import change_warning, judge_change
 from anklelab.pipelines.walking.responses import RESPONSE, Responses
 from anklelab.pipelines.walking.results import Estimate, TimingPoint, sd
@@ -89,7 +94,7 @@ def _draw_counts(n: int, n_reps: int, rng: np.random.Generator) -> NDArray[np.in
 
 
 def _fit(
-    averages: NDArray[np.float64], lengths: list[int] | None, model: str, fs: float
+    averages: NDArray[np.float64], lengths: list[int] | None, model: StiffnessModel, fs: float
 ) -> ImpedanceFit:
     """The impedance of stacked response averages (channels :data:`RESPONSE`)."""
     return fit_impedance(
@@ -102,7 +107,7 @@ def _fit(
     )
 
 
-def _focused_choice(constant: NDArray[np.float64], linear: NDArray[np.float64]) -> str:
+def _focused_choice(constant: NDArray[np.float64], linear: NDArray[np.float64]) -> StiffnessModel:
     """The model whose stiffness has the smaller estimated mean squared error.
 
     ``constant`` and ``linear`` hold the all-trial estimate first, then the resampled ones.
@@ -116,7 +121,7 @@ def _systematic(
     full: NDArray[np.float64],
     twist_torque: NDArray[np.float64],
     n: int,
-    model: str,
+    model: StiffnessModel,
     shift: int,
     lag: float,
     fs: float,
@@ -243,9 +248,11 @@ def estimate_timing_point(
     main = averages[..., :n]  # every resample fits the analysis window only
     constant = _fit(main, [n], "constant", fs)
     linear = _fit(main, [n], "linear", fs)
-    model = settings.stiffness_model
-    if model == "auto":
-        model = _focused_choice(constant.stiffness[0], linear.stiffness[0])
+    model: StiffnessModel = (
+        _focused_choice(constant.stiffness[0], linear.stiffness[0])
+        if settings.stiffness_model == "auto"
+        else settings.stiffness_model
+    )
     window_s = n / fs
     change = linear.stiffness_slope[0] * window_s / linear.stiffness[0]
     change_estimate = _estimate(change, reps, paper, len(trials))
@@ -256,8 +263,13 @@ def estimate_timing_point(
     # inertia from the linear one whichever is chosen: a stiffness that changes within the
     # window, fitted as constant, puts its k' θ into them (module docstring). A model set by
     # hand gives all three, as paper 000's constant model does.
-    rest = "linear" if settings.stiffness_model == "auto" else model
-    source = {"stiffness": model, "damping": rest, "inertia": rest, "vaf": model}
+    rest: StiffnessModel = "linear" if settings.stiffness_model == "auto" else model
+    source: dict[str, StiffnessModel] = {
+        "stiffness": model,
+        "damping": rest,
+        "inertia": rest,
+        "vaf": model,
+    }
     fitted = {"constant": constant, "linear": linear}
     window_fits = {  # each model's fits over the sensitivity windows
         name: _fit(full, lengths[1:], name, fs) if len(lengths) > 1 else None
@@ -282,6 +294,7 @@ def estimate_timing_point(
     weight = averages[_FULL, RESPONSE.index("angle"), :n] ** 2
     determined = not estimates["stiffness"].poorly_determined
     probability, changes, verdict = judge_change(change_estimate, len(trials), determined, settings)
+    model_windows = window_fits[model]
     point = TimingPoint(
         delay_ms=float(key.split("/")[1]),
         direction=key.split("/")[0],
@@ -300,10 +313,10 @@ def estimate_timing_point(
             else None
         ),
         window_stiffness={}
-        if window_fits[model] is None
+        if model_windows is None
         else {
             f"{w:g}": float(k)
-            for w, k in zip(windows[1:], window_fits[model].stiffness[:, 0], strict=True)
+            for w, k in zip(windows[1:], model_windows.stiffness[:, 0], strict=True)
         },
         adjustment_explained=responses.explained,
         warnings=_stiffness_warning(key, estimates["stiffness"]),

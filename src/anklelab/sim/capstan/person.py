@@ -171,7 +171,7 @@ def person_profile(
     steps = math.ceil(duration_s / cycle)
     ones = np.ones(steps)
     trials = GaitTrials(
-        contact_s=cycle * np.arange(steps),
+        contact_s=cycle * np.arange(steps, dtype=np.float64),
         stance_s=gait.stance_s * ones,
         loading_s=gait.loading_s * ones,
         amplitude=ones,
