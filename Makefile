@@ -5,7 +5,7 @@ VENV := .venv
 BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
 
-.PHONY: demo test lint bench browser clean numba-cache
+.PHONY: demo test lint typecheck bench browser clean numba-cache
 
 # numba's on-disk cache checks only the timestamp of a kernel's own file, not of the callees it
 # inlines from other files; so the cache lives in a directory named after a hash of every file
@@ -28,6 +28,10 @@ demo: $(STAMP)
 lint: $(STAMP)
 	$(BIN)/ruff check .
 	$(BIN)/ruff format --check .
+
+# not part of `make test`: a newer mypy or NumPy's stubs may find new things to say
+typecheck: $(STAMP)
+	$(BIN)/mypy src
 
 # The report tests open pages in Debian's headless Chromium; install it when missing (as root).
 browser:
