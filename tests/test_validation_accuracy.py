@@ -9,8 +9,14 @@ from validation.accuracy import generate, parse_protocol
 
 def test_a_changed_protocol_reaches_the_clean_room_session():
     protocol = parse_protocol(
-        ["sample_rate_hz=2000", "timing_points_ms=(150.0, 300.0)", "onset_jitter_sd_s=(0.003, 0.004)"]
-        + ["trials_per_point=2", "n_unperturbed=3", "n_calibration=1"]
+        [
+            "sample_rate_hz=2000",
+            "timing_points_ms=(150.0, 300.0)",
+            "onset_jitter_sd_s=(0.003, 0.004)",
+            "trials_per_point=2",
+            "n_unperturbed=3",
+            "n_calibration=1",
+        ]
     )
     session = generate("cleanroom", "nominal", 100, protocol)
     assert session.info.sample_rate_hz == 2000.0
