@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import warnings
 from collections.abc import Callable
+from dataclasses import replace
 
 import numpy as np
 
@@ -21,7 +22,7 @@ from anklelab.pipelines.walking.change import pool_changes
 from anklelab.pipelines.walking.checks import filter_summary, plausibility
 from anklelab.pipelines.walking.impedance import condition_order, estimate_timing_point
 from anklelab.pipelines.walking.responses import condition_responses, outliers
-from anklelab.pipelines.walking.results import WalkingResults
+from anklelab.pipelines.walking.results import TimingPoint, WalkingResults
 from anklelab.pipelines.walking.settings import WalkingSettings
 from anklelab.pipelines.walking.stance import drop_summary, reason_kind, samples, stance_trials
 from anklelab.signals import Trials
@@ -29,6 +30,7 @@ from anklelab.signals import Trials
 __all__ = ["STEPS", "analyze_walking"]
 
 _SCREENED = ("torque", "angle", "grf_z")  # unperturbed stance channels screened for outliers
+_IMPEDANCE = ("stiffness", "damping", "inertia")
 STEPS = ("platform filters", "walking trials", "ensembles and bootstrap", "bench")
 """Names of the pipeline's steps, in order (reported to the ``progress`` callback)."""
 
@@ -112,6 +114,8 @@ def analyze_walking(
             stance = stance.drop(wild, [responses.dropped[p] for p in stance.selection[wild]])
         points.append(estimate_timing_point(responses, key, len(unperturbed), settings, rng))
     points = pool_changes(points, settings, samples(settings.window_ms, stance.fs) / stance.fs)
+    if uncorrected:
+        points = [_with_unknown_bias(point) for point in points]
     report(STEPS[3])
     held_out = len(session.calibration) > 1
     notes = plausibility(points, session.info.heel_to_ankle_m)
@@ -132,6 +136,13 @@ def analyze_walking(
         filter_vaf_by_channel=filter_vaf_by_channel,
         stance=stance,
     )
+
+
+def _with_unknown_bias(point: TimingPoint) -> TimingPoint:
+    """``point`` with its impedance flagged as carrying a bias its intervals cannot bound (the
+    platform's own moment left in the torque, :func:`~.calibration.uncorrected_moment`)."""
+    flagged = {q: replace(getattr(point, q), bias_unknown=True) for q in _IMPEDANCE}
+    return replace(point, **flagged)
 
 
 def _drop_unperturbed_outliers(stance: Trials, limit: float) -> Trials:

@@ -122,7 +122,8 @@ def uncorrected_moment(session: Session) -> list[str]:
     A ``grf_cop`` plate's moment signal ``grf_z * cop_x`` is 0 wherever the COP is empty, and
     processed exports leave it empty on an unloaded plate, so calibration trials with an empty
     COP teach the filters no moment: the platform's inertial and gravitational moment then stays
-    in the ankle torque (the measured effect is in the 'Lab data formats' guide).
+    in the ankle torque, a bias the intervals cannot bound (the measured effect is in the 'Lab
+    data formats' guide).
     """
     plate = session.info.force_plate
     column = "cop_x_m" if plate.anterior_axis[1] == "x" else "cop_y_m"
@@ -136,7 +137,9 @@ def uncorrected_moment(session: Session) -> list[str]:
         f"calibration/: the centre of pressure ({column}) is empty in {empty:.0%} of the "
         "calibration samples of this grf_cop session, so the platform filters cannot remove the "
         "platform's own moment from the ankle torque (it is taken as zero about "
-        f"plate_centre_m = {list(plate.plate_centre_m)}): stiffness and inertia may be biased "
-        "by a few percent (export the calibration trials' COP at every sample; see the guide "
-        "'Lab data formats')"
+        f"plate_centre_m = {list(plate.plate_centre_m)}): stiffness, damping and inertia carry "
+        "a bias their intervals cannot bound, and are flagged as poorly determined (on "
+        "simulated platforms the stiffness moved by up to 4.5 % and the inertia by a factor of "
+        "0.65 to 3.6, depending on how the export blanks the COP; export the calibration "
+        "trials' COP at every sample; see the guide 'Lab data formats')"
     ]

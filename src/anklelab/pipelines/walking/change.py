@@ -285,7 +285,7 @@ def pool_changes(
             estimate.change,
             sd(estimate.samples) if estimate.samples.size else np.nan,
             (estimate.change - half, estimate.change + half),
-            estimate.samples,
+            samples=estimate.samples,
         )
         out.append(_judged(point, change, estimate.n_trials, settings, window_s))
     return out

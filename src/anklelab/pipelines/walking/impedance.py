@@ -199,10 +199,10 @@ def _estimate(
     """
     centre, resampled, subsets = float(values[_FULL]), values[1 : 1 + n_reps], values[paper]
     if n_reps < 2 or n_trials < 2:
-        return Estimate(centre, sd(subsets), (np.nan, np.nan), subsets)
+        return Estimate(centre, sd(subsets), (np.nan, np.nan), samples=subsets)
     random = t_quantile(n_trials - 1, 0.975) * np.sqrt(n_trials / (n_trials - 1)) * sd(resampled)
     half = float(np.hypot(random, systematic))
-    return Estimate(centre, sd(subsets), (centre - half, centre + half), subsets)
+    return Estimate(centre, sd(subsets), (centre - half, centre + half), samples=subsets)
 
 
 def estimate_timing_point(

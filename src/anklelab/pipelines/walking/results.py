@@ -77,6 +77,9 @@ class Estimate:
         random error only and understates the estimate's standard error (~0.8×).
     ci95 : (float, float)
         95 % interval from the resampling of :mod:`.impedance` (NaN if not computed).
+    bias_unknown : bool
+        The estimate carries a bias that the interval cannot bound (the session's warnings say
+        why, e.g. a platform moment the filters could not learn); it is then poorly determined.
     samples : ndarray
         The subset values ``sd`` is taken over (in memory only).
     """
@@ -84,11 +87,15 @@ class Estimate:
     mean: float
     sd: float
     ci95: tuple[float, float] = (np.nan, np.nan)
+    bias_unknown: bool = False
     samples: NDArray[np.float64] = field(default_factory=_empty, repr=False, compare=False)
 
     @property
     def poorly_determined(self) -> bool:
-        """True when the interval spans zero or is wider than ±50 % of the estimate."""
+        """True when the interval spans zero or is wider than ±50 % of the estimate, or the
+        estimate carries a bias the interval cannot bound."""
+        if self.bias_unknown:
+            return True
         low, high = self.ci95
         if not (np.isfinite(low) and np.isfinite(high)):
             return False
@@ -96,13 +103,14 @@ class Estimate:
         return bool(low <= 0 <= high or half > POORLY_DETERMINED_FRACTION * abs(self.mean))
 
     def to_dict(self) -> dict[str, Any]:
-        """``{"mean", "sd", "ci95", "poorly_determined"}``."""
+        """``{"mean", "sd", "ci95", "poorly_determined"}``, and ``"bias_unknown": true`` when
+        it is."""
         return {
             "mean": self.mean,
             "sd": self.sd,
             "ci95": list(self.ci95),
             "poorly_determined": self.poorly_determined,
-        }
+        } | ({"bias_unknown": True} if self.bias_unknown else {})
 
     @classmethod
     def from_dict(cls, node: Any, where: str) -> Estimate:
@@ -112,7 +120,12 @@ class Estimate:
                 f"{where}: expected {{'mean': ..., 'sd': ...}}, got {node!r:.60}"
             )
         low, high = node.get("ci95") or (None, None)
-        return cls(_float(node["mean"]), _float(node.get("sd")), (_float(low), _float(high)))
+        return cls(
+            _float(node["mean"]),
+            _float(node.get("sd")),
+            (_float(low), _float(high)),
+            bias_unknown=bool(node.get("bias_unknown", False)),
+        )
 
 
 def _float(value: Any) -> float:
