@@ -19,7 +19,7 @@ from anklelab.pipelines.walking.calibration import (
     uncorrected_moment,
 )
 from anklelab.pipelines.walking.change import pool_changes
-from anklelab.pipelines.walking.checks import filter_summary, plausibility
+from anklelab.pipelines.walking.checks import filter_summary, plausibility, walking_direction
 from anklelab.pipelines.walking.impedance import condition_order, estimate_timing_point
 from anklelab.pipelines.walking.responses import condition_responses, outliers
 from anklelab.pipelines.walking.results import TimingPoint, WalkingResults
@@ -118,7 +118,7 @@ def analyze_walking(
         points = [_with_unknown_bias(point) for point in points]
     report(STEPS[3])
     held_out = len(session.calibration) > 1
-    notes = plausibility(points, session.info.heel_to_ankle_m)
+    notes = [*walking_direction(session), *plausibility(points, session.info.heel_to_ankle_m)]
     if not held_out:
         notes.append(
             "platform filters: the session has one calibration trial, so their VAF is scored on "

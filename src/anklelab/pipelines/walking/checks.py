@@ -13,14 +13,30 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from anklelab.data.session import Session
 from anklelab.ident.irf import PlatformFilters
 from anklelab.pipelines.walking.results import TimingPoint, sd
 
-__all__ = ["MAX_STIFFNESS_NM_PER_RAD", "filter_summary", "plausibility"]
+__all__ = [
+    "MAX_STIFFNESS_NM_PER_RAD",
+    "MIN_STIFFNESS_NM_PER_RAD",
+    "filter_summary",
+    "plausibility",
+    "walking_direction",
+]
 
 MAX_STIFFNESS_NM_PER_RAD = 20_000.0
 """Above this an ankle stiffness is implausible (the stiffest prosthetic feet and a human ankle
 at push-off are well below 10 000 N·m/rad)."""
+MIN_STIFFNESS_NM_PER_RAD = 20.0
+"""Below this (yet positive) an ankle stiffness is implausible for a foot loaded in stance: a
+human ankle's stiffness in walking is of the order of 1-10 N·m/rad per kg of body mass, so a few
+hundred N·m/rad. A plate declared 90 degrees off reads a few N·m/rad (its ``dx`` is then the
+COP across the foot)."""
+LOADED_FRACTION = 0.5
+""":func:`walking_direction` reads the COP where the vertical force exceeds this fraction of its
+peak (the COP of a lightly loaded plate is noisy)."""
+_DIRECTION_TRIALS = 50  # unperturbed trials read by walking_direction
 FOOT_LENGTH_M = 0.30
 """A lever arm farther than this from the heel-contact point lies beyond any foot's toes."""
 _HEEL_MARGIN_M = 0.02  # a COP may sit slightly behind the heel-contact point
@@ -61,6 +77,13 @@ def plausibility(points: Sequence[TimingPoint], heel_to_ankle_m: float) -> list[
                 "implausible for an ankle: check the geometry's units (metres) and the "
                 "channels for glitches"
             )
+        elif k < MIN_STIFFNESS_NM_PER_RAD:
+            messages.append(
+                f"{tp.key}: stiffness {k:.1f} N·m/rad is below {MIN_STIFFNESS_NM_PER_RAD:.0f}, "
+                "implausible for an ankle loaded in stance: check anterior_axis (a plate "
+                "declared 90 degrees off reads the COP across the foot), the plate's channel "
+                "map and the angles' scale (radians)"
+            )
         if not lowest <= tp.cop_m <= highest:
             messages.append(
                 f"{tp.key}: the lever arm {100 * tp.cop_m:.1f} cm lies outside the foot (expected "
@@ -74,6 +97,39 @@ def plausibility(points: Sequence[TimingPoint], heel_to_ankle_m: float) -> list[
             )
     messages += _directions_disagree(points)
     return messages
+
+
+def walking_direction(session: Session) -> list[str]:
+    """A warning when the COP travels across the declared walking direction, not along it.
+
+    Heel to toe, the COP of a loaded foot moves 10-20 cm along the walking direction and a few
+    centimetres across it. In up to 50 unperturbed trials, the COP's range along and across the
+    plate's ``anterior_axis`` is read where the vertical force exceeds
+    :data:`LOADED_FRACTION` of the trial's peak; when the medians say it moves farther across,
+    ``anterior_axis`` names the wrong plate axis (the sign is checked by the lever arms).
+    """
+    plate = session.info.force_plate
+    trials = [t.recording for t in session.walking if not t.perturbed][:_DIRECTION_TRIALS]
+    along, across = [], []
+    for recording in trials:
+        load = plate.lab_load(recording.stack(plate.channels))
+        loaded = load.grf_z > LOADED_FRACTION * np.max(load.grf_z, initial=0.0)
+        if loaded.sum() < 2:
+            continue
+        along.append(np.ptp(np.nan_to_num(load.cop_x[loaded])))
+        across.append(np.ptp(np.nan_to_num(load.cop_y[loaded])))
+    if not along or np.median(across) <= np.median(along):
+        return []
+    axis = plate.anterior_axis
+    other = "y" if axis[1] == "x" else "x"
+    return [
+        f"walking/: the centre of pressure of the loaded foot travels "
+        f"{100 * np.median(across):.1f} cm across the declared walking direction "
+        f"(anterior_axis = {axis!r}) and {100 * np.median(along):.1f} cm along it (medians of "
+        f"{len(along)} unperturbed trials): the walking direction is probably the plate's "
+        f"{other} axis (anterior_axis '+{other}' or '-{other}'), and every lever arm and "
+        "stiffness is then wrong"
+    ]
 
 
 def _directions_disagree(points: Sequence[TimingPoint]) -> list[str]:
