@@ -346,7 +346,11 @@ def test_results_document_has_exactly_the_contract_keys(analysed):
         "bench",
         "validation",
         "dropped_trials",
+        "warnings",
     }
+    # the hand-made foot's lever arm at 150 ms (about 2 cm) lies short of the bench's 6-11 cm
+    (warning,) = doc["warnings"]
+    assert re.match(r"validation: the lever arms of dorsi/150 \(2\.\d cm\) lie more than", warning)
     assert set(doc["platform_filters"]) == {
         "n_lags",
         "vaf_percent_mean",
@@ -398,7 +402,9 @@ def test_results_document_has_exactly_the_contract_keys(analysed):
         "cop_m",
         "bench_stiffness_nm_per_rad",
         "error_percent",
+        "bench_extrapolated",
     }
+    assert [v["bench_extrapolated"] for v in doc["validation"]] == [True, False]
     assert doc["settings"]["cutoff_hz"] == 20.0 and doc["settings"]["window_ms"] == 100.0
     assert doc["settings"]["offset_reference_ms"] == 80.0  # resolved from the low-pass
 
@@ -533,7 +539,8 @@ def test_one_mislabelled_trial_is_dropped_without_a_warning(early_late):
     points = {tp.key: tp.n_perturbed for tp in result.timing_points}
     assert points[f"plantar/{first.delay_ms:g}"] == 5  # the trial's true timing point
     assert points[f"plantar/{SWAP[first.delay_ms]:g}"] == 6  # its label: the others only
-    assert not result.warnings
+    # the only warning: the hand-made foot's lever arms lie beyond the bench's distances
+    assert [w.split(":")[0] for w in result.warnings] == ["validation"]
 
 
 def test_onset_tolerance_is_a_setting(early_late):

@@ -1,5 +1,6 @@
-"""Plausibility checks of the walking analysis: a plate declared a quarter turn off, and an
-implausibly low stiffness, are named (found by a new user's trial: 7 N·m/rad printed as fine)."""
+"""Plausibility checks of the walking analysis: a plate declared a quarter turn off, an
+implausibly low stiffness (a new user's trial printed 7 N·m/rad as fine) and a bench value
+extrapolated beyond the tested distances are named."""
 
 from __future__ import annotations
 
@@ -8,9 +9,15 @@ import re
 
 import pytest
 
-from anklelab.pipelines import WalkingSettings, analyze_walking
-from anklelab.pipelines.walking.checks import plausibility, walking_direction
+from anklelab.ident.bench import BenchStiffness
+from anklelab.pipelines import WalkingResults, WalkingSettings, analyze_walking
+from anklelab.pipelines.walking.checks import (
+    extrapolated_bench,
+    plausibility,
+    walking_direction,
+)
 from anklelab.pipelines.walking.results import Estimate, TimingPoint
+from anklelab.report.summary import impedance_summary_table
 from tests.lab_twin import small_twin
 
 
@@ -61,3 +68,32 @@ def test_a_stiffness_below_20_nm_per_rad_is_implausible(stiffness, flagged):
     assert any("below 20, implausible for an ankle loaded in stance" in m for m in messages) == (
         flagged
     )
+
+
+def test_a_lever_arm_beyond_the_bench_distances_is_extrapolated_and_named():
+    """The clean-room stiff prosthetic foot of seed 100 read lever arms of 2.3 and 4.2 cm where
+    the bench tested 6.2 to 10.6 cm: its walking-minus-bench errors came from the bench line
+    extended. 0.5 mm short of the tested range is no extrapolation."""
+    bench = [BenchStiffness(0.062, 1400.0, 1.0, 5), BenchStiffness(0.106, 1000.0, 1.0, 5)]
+    points = [
+        dataclasses.replace(_point(1500.0), delay_ms=d, direction=direction, cop_m=cop)
+        for d, direction, cop in (
+            (100.0, "dorsi", 0.023),
+            (225.0, "dorsi", 0.0615),
+            (225.0, "plantar", 0.02),
+            (475.0, "dorsi", 0.12),
+        )
+    ]
+    (message,) = extrapolated_bench(points, bench)
+    assert message.startswith(
+        "validation: the lever arms of dorsi/100 (2.3 cm), dorsi/475 (12.0 cm) lie more than 5 mm "
+        "outside the bench tests' actuator distances (6.2 to 10.6 cm)"
+    )
+    results = WalkingResults(WalkingSettings(), {}, points, bench)
+    flags = {row["delay_ms"]: row["bench_extrapolated"] for row in results.validation()}
+    assert flags == {100.0: True, 225.0: False, 475.0: True}
+    table = impedance_summary_table(results)
+    column = list(table.columns).index("bench stiffness (N·m/rad)")
+    marked = [row[column].endswith(" (line extended)") for row in table.rows]
+    assert marked == [True, False, True, True]  # the report marks them, plantarflexion too
+    assert extrapolated_bench(points[1:3], bench) == [] == extrapolated_bench(points, [])

@@ -20,7 +20,17 @@ from anklelab.errors import ParameterError
 if TYPE_CHECKING:
     from anklelab.data.session import BenchTest
 
-__all__ = ["BenchStiffness", "bench_stiffness", "interpolate_stiffness"]
+__all__ = [
+    "EXTRAPOLATION_MARGIN_M",
+    "BenchStiffness",
+    "bench_stiffness",
+    "extrapolated",
+    "interpolate_stiffness",
+]
+
+EXTRAPOLATION_MARGIN_M = 0.005
+"""A lever arm this far beyond the tested distances, m, is :func:`extrapolated` (closer, the
+bench line is as good as measured there: a walking lever arm is known to a few millimetres)."""
 
 
 class BenchStiffness(NamedTuple):
@@ -131,3 +141,19 @@ def interpolate_stiffness(
     segment = np.clip(np.searchsorted(d, x) - 1, 0, d.size - 2)
     slope = (k[segment + 1] - k[segment]) / (d[segment + 1] - d[segment])
     return k[segment] + slope * (x - d[segment])
+
+
+def extrapolated(
+    rows: Sequence[BenchStiffness], distance_m: float, margin_m: float = EXTRAPOLATION_MARGIN_M
+) -> bool:
+    """Whether ``distance_m`` lies more than ``margin_m`` outside the tested distances, where
+    :func:`interpolate_stiffness` extends the bench line instead of interpolating measurements.
+
+    Examples
+    --------
+    >>> rows = [BenchStiffness(0.06, 1300.0, 1.0, 5), BenchStiffness(0.11, 975.0, 1.0, 5)]
+    >>> [extrapolated(rows, d) for d in (0.0599, 0.054, 0.11, 0.12)]
+    [False, True, False, True]
+    """
+    tested = [row.distance_m for row in rows]
+    return not min(tested) - margin_m <= distance_m <= max(tested) + margin_m

@@ -359,9 +359,14 @@ def walking_sections(
     vaf = filters.get("vaf_percent_mean")
     text = (
         f"{len(points)} conditions; the platform filters explain {_number(vaf, '.1f')} % of "
-        "the unloaded platform's forces (held-out calibration trials). Walking − bench: the "
-        "estimate against the testing machine at the same lever arm (paper 000: 3.6 to 8.4 %)."
+        "the unloaded platform's forces (held-out calibration trials)."
     )
+    if results.bench:
+        text += (
+            " Walking − bench: the estimate against the testing machine at the same lever arm "
+            '(paper 000: 3.6 to 8.4 %); a bench value marked "line extended" lies beyond the '
+            "tested distances."
+        )
     if SD95 in interval_kind(results.timing_points):
         text += (
             " Intervals marked * are mean ± 1.96 sd of the bootstrap (results written without "

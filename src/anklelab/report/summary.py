@@ -12,6 +12,7 @@ import re
 from collections.abc import Mapping, Sequence
 from typing import TYPE_CHECKING, Any
 
+from anklelab.ident.bench import extrapolated
 from anklelab.report.figures_impedance import (
     DIRECTIONS,
     IMPEDANCE,
@@ -123,6 +124,12 @@ _CHANGE_WORDS = {"changes": ": changes", "undetermined": ": change undetermined"
 """What the change diagnostic's verdict adds to the model's name (nothing when constant)."""
 
 
+def _extended(results: WalkingResults, cop_m: float) -> str:
+    """What marks a bench value read beyond the tested distances (``validation``'s
+    ``bench_extrapolated``)."""
+    return " (line extended)" if extrapolated(results.bench, cop_m) else ""
+
+
 def impedance_summary_table(results: WalkingResults) -> Table:
     """One row per condition: lever arm, k, b, I with 95 % intervals, VAF, the stiffness model
     and the change diagnostic's verdict, bench, error."""
@@ -140,7 +147,7 @@ def impedance_summary_table(results: WalkingResults) -> Table:
                 *(_interval(tp, q) for q in IMPEDANCE),
                 "—" if math.isnan(tp.vaf.mean) else f"{tp.vaf.mean:.1f}",
                 tp.stiffness_model + _CHANGE_WORDS.get(tp.stiffness_change_verdict, ""),
-                "—" if math.isnan(b) else f"{b:.0f}",
+                "—" if math.isnan(b) else f"{b:.0f}{_extended(results, tp.cop_m)}",
                 "—" if math.isnan(b) or math.isnan(k) else f"{100 * (k - b) / b:+.1f}",
             ]
         )

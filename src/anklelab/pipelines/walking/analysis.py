@@ -19,7 +19,12 @@ from anklelab.pipelines.walking.calibration import (
     uncorrected_moment,
 )
 from anklelab.pipelines.walking.change import pool_changes
-from anklelab.pipelines.walking.checks import filter_summary, plausibility, walking_direction
+from anklelab.pipelines.walking.checks import (
+    extrapolated_bench,
+    filter_summary,
+    plausibility,
+    walking_direction,
+)
 from anklelab.pipelines.walking.impedance import condition_order, estimate_timing_point
 from anklelab.pipelines.walking.responses import condition_responses, outliers
 from anklelab.pipelines.walking.results import TimingPoint, WalkingResults
@@ -118,7 +123,12 @@ def analyze_walking(
         points = [_with_unknown_bias(point) for point in points]
     report(STEPS[3])
     held_out = len(session.calibration) > 1
-    notes = [*walking_direction(session), *plausibility(points, session.info.heel_to_ankle_m)]
+    bench = bench_stiffness(session.bench)
+    notes = [
+        *walking_direction(session),
+        *plausibility(points, session.info.heel_to_ankle_m),
+        *extrapolated_bench(points, bench),
+    ]
     if not held_out:
         notes.append(
             "platform filters: the session has one calibration trial, so their VAF is scored on "
@@ -128,7 +138,7 @@ def analyze_walking(
         settings=settings,
         platform_filters=filter_summary(filters, filter_vaf, filter_vaf_by_channel, held_out),
         timing_points=points,
-        bench=bench_stiffness(session.bench),
+        bench=bench,
         drops=_drop_counts(stance),
         warnings=(*mislabelled, *uncorrected, *notes),
         filters=filters,

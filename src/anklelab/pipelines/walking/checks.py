@@ -14,12 +14,14 @@ import numpy as np
 from numpy.typing import NDArray
 
 from anklelab.data.session import Session
+from anklelab.ident.bench import EXTRAPOLATION_MARGIN_M, BenchStiffness, extrapolated
 from anklelab.ident.irf import PlatformFilters
 from anklelab.pipelines.walking.results import TimingPoint, sd
 
 __all__ = [
     "MAX_STIFFNESS_NM_PER_RAD",
     "MIN_STIFFNESS_NM_PER_RAD",
+    "extrapolated_bench",
     "filter_summary",
     "plausibility",
     "walking_direction",
@@ -129,6 +131,26 @@ def walking_direction(session: Session) -> list[str]:
         f"{len(along)} unperturbed trials): the walking direction is probably the plate's "
         f"{other} axis (anterior_axis '+{other}' or '-{other}'), and every lever arm and "
         "stiffness is then wrong"
+    ]
+
+
+def extrapolated_bench(points: Sequence[TimingPoint], bench: Sequence[BenchStiffness]) -> list[str]:
+    """A warning when a dorsiflexion point's lever arm lies outside the bench tests' distances
+    (:func:`~anklelab.ident.bench.extrapolated`): its bench stiffness (``validation``) is then
+    the bench line extended, not a measurement."""
+    if not bench:
+        return []
+    outside = [tp for tp in points if tp.direction == "dorsi" and extrapolated(bench, tp.cop_m)]
+    if not outside:
+        return []
+    low, high = min(b.distance_m for b in bench), max(b.distance_m for b in bench)
+    named = ", ".join(f"{tp.key} ({100 * tp.cop_m:.1f} cm)" for tp in outside)
+    return [
+        f"validation: the lever arms of {named} lie more than {1000 * EXTRAPOLATION_MARGIN_M:g} "
+        f"mm outside the bench tests' actuator distances ({100 * low:.1f} to {100 * high:.1f} "
+        "cm), so their bench stiffness is the bench line extended, not measured "
+        "(bench_extrapolated in results.json); the lever arm itself rests on the COP at heel "
+        "contact (see the walking guide)"
     ]
 
 

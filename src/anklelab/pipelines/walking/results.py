@@ -18,7 +18,7 @@ from numpy.typing import NDArray
 
 from anklelab._version import __version__
 from anklelab.errors import ResultsFormatError
-from anklelab.ident.bench import BenchStiffness, interpolate_stiffness
+from anklelab.ident.bench import BenchStiffness, extrapolated, interpolate_stiffness
 from anklelab.pipelines.walking.settings import WalkingSettings
 from anklelab.signals import Trials
 
@@ -334,8 +334,10 @@ class WalkingResults:
         """Number of dropped walking trials per kind of reason."""
         return dict(self.drops)
 
-    def validation(self) -> list[dict[str, float]]:
-        """Dorsiflexion estimates against the bench stiffness interpolated at ``cop_m``."""
+    def validation(self) -> list[dict[str, float | bool]]:
+        """Dorsiflexion estimates against the bench stiffness interpolated at ``cop_m``
+        (``bench_extrapolated`` where ``cop_m`` lies outside the tested distances, see
+        :func:`~anklelab.ident.bench.extrapolated`)."""
         if not self.bench:
             return []
         rows = []
@@ -349,6 +351,7 @@ class WalkingResults:
                     "cop_m": tp.cop_m,
                     "bench_stiffness_nm_per_rad": bench,
                     "error_percent": (tp.stiffness.mean - bench) / bench * 100.0,
+                    "bench_extrapolated": extrapolated(self.bench, tp.cop_m),
                 }
             )
         return rows
