@@ -23,6 +23,16 @@ from tests.c3d_files import write_c3d
 from tests.lab_twin import small_twin
 
 MAP = Path(__file__).parents[1] / "examples" / "maps" / "c3d_kistler.toml"
+
+
+def _twin_map(tmp_path, session, old="", new=""):
+    """The shipped map (which leaves delay_ms at 0) with the twin's amplifier delay."""
+    delay = f"delay_ms = {session.info.force_delay_ms!r}"
+    text = MAP.read_text().replace("delay_ms = 0.0", delay).replace(old, new)
+    (tmp_path / "twin_map.toml").write_text(text)
+    return tmp_path / "twin_map.toml"
+
+
 # paper 000's analysis for both: the comparison is of the data. With a few trials per point the
 # automatic model choice can fall either way on near-equal evidence, and the covariate adjustment,
 # learnt from a handful of unperturbed trials, turns the formats' small differences (a COP left
@@ -102,9 +112,9 @@ def twin(tmp_path_factory):
     return session, root, analyze_walking(session, SETTINGS)
 
 
-def test_c3d_round_trip_gives_the_native_stiffness(twin):
+def test_c3d_round_trip_gives_the_native_stiffness(twin, tmp_path):
     session, root, native = twin
-    imported = import_c3d(root, MAP)
+    imported = import_c3d(root, _twin_map(tmp_path, session))
     plate = imported.info.force_plate
     assert plate.type == "kistler8" and plate.anterior_axis == "+x"
     assert (plate.a_m, plate.b_m, plate.az0_m) == pytest.approx(
@@ -121,10 +131,9 @@ def test_c3d_round_trip_gives_the_native_stiffness(twin):
 
 @pytest.mark.parametrize("kind", ["six_axis", "grf_cop"])
 def test_c3d_plate_stored_as_six_axis_or_grf_cop(twin, tmp_path, kind):
-    _session, root, native = twin
-    text = MAP.read_text().replace('type = "kistler8"', f'type = "{kind}"')
-    (tmp_path / "map.toml").write_text(text)
-    imported = import_c3d(root, tmp_path / "map.toml")
+    session, root, native = twin
+    text = ('type = "kistler8"', f'type = "{kind}"')
+    imported = import_c3d(root, _twin_map(tmp_path, session, *text))
     assert imported.info.force_plate.type == kind
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")

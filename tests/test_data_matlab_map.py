@@ -100,9 +100,13 @@ def twin(tmp_path_factory):
     return session, path
 
 
-def test_shipped_map_reads_the_layout_and_gives_the_native_stiffness(twin):
+def test_shipped_map_reads_the_layout_and_gives_the_native_stiffness(twin, tmp_path):
+    """The shipped map leaves delay_ms at 0; the twin's amplifier records 1.031 ms late."""
     session, path = twin
-    imported = import_matlab(path, MAP)
+    twin_map = tmp_path / "twin_map.toml"
+    delay = f"delay_ms = {session.info.force_delay_ms!r}"
+    twin_map.write_text(MAP.read_text().replace("delay_ms = 0.0", delay))
+    imported = import_matlab(path, twin_map)
     assert imported.info.subject == "S07" and imported.info.force_plate.type == "grf_cop"
     assert len(imported.calibration) == 2 and len(imported.walking) == len(session.walking)
     labels = {w.trial for w in imported.walking}

@@ -23,8 +23,8 @@ def forceplate(
         typer.Option(
             "--min-force",
             min=0.0,
-            help="Force normal to the plate below which the COP and the free moment are left "
-            "empty, N.",
+            help="Magnitude of the force normal to the plate below which the COP and the free "
+            "moment are left empty, N.",
         ),
     ] = 10.0,
     force: Annotated[bool, typer.Option("--force", help="Replace OUT if it exists.")] = False,

@@ -20,8 +20,9 @@ platform's ground reaction force, centre of pressure and free moment in the file
   metres; force channels must be in N; moment channels in N·m or N·mm by their
   ``ANALOG:UNITS`` (empty: N·``POINT:UNITS``), type 4 calibrated moments in N·``POINT:UNITS``;
 - **results**: GRF is the force of the plate on the body (the opposite of the plate's
-  channels); the COP lies on the plate surface and is NaN where the vertical force is below
-  ``min_force_n``; type 3's ``FPCOPPOLY`` COP correction is applied when present; the free
+  channels); the COP lies on the plate surface and is NaN where the vertical force's
+  magnitude is below ``min_force_n`` (a pulling force keeps its COP, where its moment
+  vanishes); type 3's ``FPCOPPOLY`` COP correction is applied when present; the free
   moment is the plate's moment on the body about the upward vertical through the COP.
 
 ezc3d's C++ reader can crash or hang on a corrupt file, so files are read in worker processes
@@ -459,8 +460,8 @@ def plate_load(c3d: C3DFile, plate: C3DPlate, *, min_force_n: float = 10.0) -> G
     c3d : C3DFile
     plate : C3DPlate
     min_force_n : float
-        The COP (and the free moment) are NaN where the force normal to the plate is below
-        this, N.
+        The COP (and the free moment) are NaN where the magnitude of the force normal to the
+        plate is below this, N.
     """
     force, moment, to_surface = plate_wrench(c3d, plate)
     surface = moment + np.cross(force, to_surface, axis=0)  # moment about the surface centre
