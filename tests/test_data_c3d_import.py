@@ -242,6 +242,29 @@ def test_malformed_mapping_or_trial_list_is_named(twin, tmp_path, old, new, targ
         import_c3d(directory, mapping)
 
 
+def test_a_trial_list_without_walking_trials_is_refused(twin, tmp_path):
+    _, root, _ = twin
+    lines = (root / "trials.csv").read_text().splitlines()
+    kept = [line for line in lines if ",walking," not in line]
+    directory, mapping = _edit(tmp_path, root, "\n".join(lines), "\n".join(kept), "csv")
+    with pytest.raises(
+        SessionFormatError,
+        match=r"copy: no walking trial among the 2 C3D file\(s\) the map lists \(its \[trials\] "
+        r"table says which are calibration, walking or bench trials\)",
+    ):
+        import_c3d(directory, mapping)
+
+
+def test_a_directory_of_c3d_trials_given_as_a_session_says_to_import_it(twin):
+    _, root, _ = twin
+    with pytest.raises(
+        SessionFormatError,
+        match=r"trials: no session\.toml, but \d+ C3D file\(s\): a directory of C3D trials is "
+        r"read with 'anklelab import c3d DIR --map MAP\.toml'",
+    ):
+        load_session(root)
+
+
 def test_import_c3d_command_and_default_import(twin, tmp_path):
     from typer.testing import CliRunner
 

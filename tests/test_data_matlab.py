@@ -222,7 +222,11 @@ def test_missing_field_and_missing_variable(tmp_path, session):
     ):
         read_matlab(tmp_path / "a.mat")
     scipy.io.savemat(tmp_path / "b.mat", {"data": 1.0})
-    with pytest.raises(SessionFormatError, match=r"b\.mat: no variable 'session' \(found: data\)"):
+    with pytest.raises(
+        SessionFormatError,
+        match=r"b\.mat: no variable 'session' \(found: data\); a MATLAB file of another layout "
+        r"is read with 'anklelab import matlab FILE --map MAP\.toml'",
+    ):
         read_matlab(tmp_path / "b.mat")
     (tmp_path / "c.mat").write_bytes(b"not a mat file at all")
     with pytest.raises(SessionFormatError, match=r"c\.mat: cannot read as a MAT file"):

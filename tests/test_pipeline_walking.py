@@ -568,7 +568,11 @@ def test_every_label_swapped_is_a_clear_error_naming_the_conditions(early_late):
 
 def test_no_unperturbed_trials_is_a_clear_error():
     mini = MiniSession(GEOMETRIES["+x"], n_per_point=3, n_unperturbed=0, delays=(200.0,), seed=4)
-    with pytest.raises(SessionFormatError, match="no usable unperturbed trials"):
+    with pytest.raises(
+        SessionFormatError,
+        match=r"walking/trials\.csv: no unperturbed trials \(perturbed = 0\): their average "
+        "stance is what the analysis subtracts",
+    ):
         analyze_walking(mini.session)
 
 

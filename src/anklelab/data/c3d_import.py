@@ -381,8 +381,13 @@ def _import(root: Path, mapping: Path, spec: C3DMapping, workers: int) -> Sessio
             if isinstance(spec.trials, TrialsFromEvents):
                 row = row | _event_row(c3d, spec.trials)
             walking.append(_walking(c3d, row, recording))
-    if plate_table is None:
-        raise SessionFormatError(f"{root}: no calibration or walking trial to take the plate from")
+    if not walking:
+        raise SessionFormatError(
+            f"{root}: no walking trial among the {len(entries)} C3D file(s) the map lists "
+            "(its [trials] table says which are calibration, walking or bench trials); a "
+            "session needs walking trials"
+        )
+    assert plate_table is not None  # set by the first walking trial
     plate_table.setdefault("anterior_axis", "+x")
     if spec.plate.delay_ms:  # as session.toml's [force_plate] delay_ms
         plate_table["delay_ms"] = spec.plate.delay_ms

@@ -486,9 +486,24 @@ def files_hash(root: str | Path, files: Iterable[Path]) -> str:
     return SessionReader(Path(root)).sha256(files)
 
 
+def _not_c3d_trials(root: Path) -> None:
+    """Refuse, saying what to run, a directory of C3D trials without a ``session.toml``."""
+    if (root / "session.toml").exists():
+        return
+    with os.scandir(root) as entries:
+        trials = sum(e.name.lower().endswith(".c3d") for e in entries)
+    if trials:
+        raise SessionFormatError(
+            f"{root}: no session.toml, but {trials} C3D file(s): a directory of C3D trials is "
+            "read with 'anklelab import c3d DIR --map MAP.toml' (see the guide 'Lab data "
+            "formats'), then analysed"
+        )
+
+
 def _read_directory(path: str | Path, progress: Progress | None) -> tuple[Session, str]:
     """The session and the SHA-256 of every file read (:func:`directory_hash`)."""
     reader = _reader(path)
+    _not_c3d_trials(reader.root)
     info = info_from_mapping(
         read_session_toml(reader, reader.root / "session.toml"), str(reader.root / "session.toml")
     )

@@ -190,7 +190,13 @@ def _load(path: Path, only: str | None = None) -> dict[str, Any]:
 def _require(path: Path, name: str | None, names: list[str]) -> None:
     if name is not None and name not in names:
         found = ", ".join(excerpt(k, 40, quote=False) for k in names) or "none"
-        raise SessionFormatError(f"{path}: no variable {name!r} (found: {found})")
+        hint = (
+            "; a MATLAB file of another layout is read with 'anklelab import matlab FILE --map "
+            "MAP.toml' (see the guide 'Lab data formats')"
+            if name == "session"
+            else ""
+        )
+        raise SessionFormatError(f"{path}: no variable {name!r} (found: {found}){hint}")
 
 
 # --- building the session -----------------------------------------------------------------------

@@ -94,6 +94,12 @@ def analyze_walking(
     drops = "; ".join(
         [*mislabelled, f"drop reasons: {drop_summary(stance.drop_log, session.walking)}"]
     )
+    if not any(not trial.perturbed for trial in session.walking):
+        raise SessionFormatError(
+            "walking/trials.csv: no unperturbed trials (perturbed = 0): their average stance is "
+            "what the analysis subtracts from the perturbed trials (paper 000 interleaves them); "
+            "a session needs some"
+        )
     if len(unperturbed) == 0:
         raise SessionFormatError(
             "walking/trials.csv: no usable unperturbed trials, so the walking profile cannot be "
