@@ -163,3 +163,14 @@ def test_a_directory_with_every_array_inside_its_json_still_reads(tmp_path):
     shutil.rmtree(d / "truth")
     (d / "truth.json").write_text(to_json(s.truth))  # as anklelab wrote it before the .npy files
     assert diff_sessions(read_directory(d), s) == []
+
+
+def test_an_input_is_named_by_its_file_or_directory_even_as_dot(tmp_path, monkeypatch):
+    from anklelab.data import input_name
+
+    (tmp_path / "S03 été").mkdir()
+    monkeypatch.chdir(tmp_path / "S03 été")
+    assert input_name(".") == "S03 été" and input_name("..") == tmp_path.name
+    assert input_name("a/b/session.h5") == "session.h5" and input_name("dir/") == "dir"
+    (tmp_path / "link").symlink_to(tmp_path / "S03 été")
+    assert input_name(tmp_path / "link") == "link"  # the name the user gave, not the target's

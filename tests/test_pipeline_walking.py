@@ -715,6 +715,7 @@ def test_cli_identify_then_analyze_writes_results_table_and_figures(tmp_path):
     assert result.exit_code == 0, result.output
     doc = json.loads((out / "results.json").read_text())
     assert doc["session"] == path.name
+    assert doc["subject"] == mini.session.info.subject == "mini"
     assert doc["session_sha256"] == session_hash(path)
     assert doc["settings"]["bootstrap_reps"] == 30 and doc["settings"]["window_ms"] == 90.0
     assert len(doc["timing_points"]) == 2 and doc["platform_filters"]["vaf_percent_mean"] > 95.0

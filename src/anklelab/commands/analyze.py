@@ -164,7 +164,7 @@ def analyze(
         # the arguments checked, the figure workers start: they import matplotlib while this
         # process imports the analysis and reads the session (and are ended if that fails)
         renderer = stack.enter_context(_renderer(figures))
-        from anklelab.data import load_session_hashed
+        from anklelab.data import input_name, load_session_hashed
         from anklelab.errors import AnklelabWarning
         from anklelab.ident.irf import PlatformFilters
         from anklelab.pipelines.walking import STEPS, analyze_walking
@@ -195,7 +195,9 @@ def analyze(
                 filters_ready=draw_filters if figures else None,
             )
         step(len(STEPS), total)
-        document = results.to_dict(session=Path(session_path).name, session_sha256=sha256)
+        document = results.to_dict(
+            session=input_name(session_path), session_sha256=sha256, subject=session.info.subject
+        )
         write_text_atomic(run.directory / "results.json", json.dumps(document, indent=2))
         write_csv(run.directory / "results.csv", results.table())
         write_csv(run.directory / "trials.csv", trials_table(session, results))

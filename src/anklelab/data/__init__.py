@@ -43,6 +43,7 @@ _EXPORTS = {
     "SessionInfo": "session",
     "WalkingTrial": "session",
     "diff_sessions": "store",
+    "input_name": "store",
     "load_session": "store",
     "load_session_hashed": "store",
     "save_session": "store",

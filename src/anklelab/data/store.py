@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import dataclasses
 import hashlib
+import os
 from pathlib import Path
 from typing import Any, Literal
 
@@ -27,6 +28,7 @@ from anklelab.errors import ParameterError, SessionFormatError
 
 __all__ = [
     "diff_sessions",
+    "input_name",
     "load_session",
     "load_session_hashed",
     "save_session",
@@ -36,6 +38,12 @@ __all__ = [
 
 SessionKind = Literal["dir", "h5", "mat"]
 _CHUNK = 1 << 20
+
+
+def input_name(path: str | Path) -> str:
+    """The name results give an input: its file or directory name (``.`` and ``..`` named by
+    the directory they stand for, links not followed)."""
+    return Path(os.path.abspath(path)).name
 
 
 def session_kind(path: str | Path) -> SessionKind:

@@ -197,7 +197,9 @@ def run_perturberator(
         progress=lambda name: step(names.index(name), len(names)),
     )
     step(len(names), len(names))
-    document = results.to_dict(session=path.name, session_sha256=session_hash(path))
+    document = results.to_dict(
+        session=path.name, session_sha256=session_hash(path), subject=session.info.subject
+    )
     write_json_atomic(directory / "results.json", document)
     return PerturberatorDemo(directory, session, bode, results, document)
 

@@ -491,7 +491,7 @@ def results_report(
         if name == "results.json":
             sections += walking_sections(document, directory, figures=found)
             metadata = run_metadata(document, directory)
-            named = document.get("subject") or document.get("session")
+            named = " ".join(filter(None, [document.get("subject"), document.get("session")]))
             title = f"Walking impedance: {named}" if named else "Walking impedance"
         else:
             sections.append(friction_section(document, directory, figures=found))

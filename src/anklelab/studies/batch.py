@@ -67,7 +67,7 @@ def analyse_session_file(path: str, settings: WalkingSettings) -> dict[str, Any]
     """Read and analyse one session (in a worker); its results document and CSV rows."""
     import warnings
 
-    from anklelab.data import load_session_hashed
+    from anklelab.data import input_name, load_session_hashed
     from anklelab.errors import AnklelabWarning
     from anklelab.pipelines.walking import analyze_walking
 
@@ -77,7 +77,9 @@ def analyse_session_file(path: str, settings: WalkingSettings) -> dict[str, Any]
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", AnklelabWarning)
         results = analyze_walking(session, settings)
-    document = results.to_dict(session=Path(path).name, session_sha256=sha256)
+    document = results.to_dict(
+        session=input_name(path), session_sha256=sha256, subject=session.info.subject
+    )
     return {
         "subject": session.info.subject,
         "document": document,

@@ -356,7 +356,9 @@ class WalkingResults:
             )
         return rows
 
-    def to_dict(self, session: str, session_sha256: str | None = None) -> dict[str, Any]:
+    def to_dict(
+        self, session: str, session_sha256: str | None = None, subject: str = ""
+    ) -> dict[str, Any]:
         """The ``results.json`` document (DESIGN §5, extended additively).
 
         Parameters
@@ -365,12 +367,15 @@ class WalkingResults:
             Name of the analysed input (its file or directory name).
         session_sha256 : str, optional
             SHA-256 of the input (:func:`anklelab.data.session_hash`), recorded when given.
+        subject : str
+            The session's subject (``session.toml``'s ``subject``), recorded when not empty.
         """
         return _finite(
             {
                 "anklelab_version": __version__,
                 "session": session,
                 **({"session_sha256": session_sha256} if session_sha256 else {}),
+                **({"subject": subject} if subject else {}),
                 "settings": self.settings.model_dump(mode="json")
                 | {"offset_reference_ms": self.settings.offset_reference()},
                 "platform_filters": self.platform_filters,
