@@ -265,6 +265,10 @@ def test_batch_analyses_sessions_into_a_group_table(tmp_path):
     assert {"ci95_low", "ci95_high", "sd", "poorly_determined", "stiffness_model"} <= set(group)
     pooled = pd.read_csv(out / "pooled.csv")
     assert (pooled["n_subjects"] <= 2).all() and (pooled["n_subjects"] == 2).any()
+    # a prosthetic foot and a human ankle pooled: the stiffness interval of two means spans zero
+    stiffness = pooled[(pooled["quantity"] == "stiffness_nm_per_rad") & (pooled["n_subjects"] == 2)]
+    spans_zero = (stiffness["ci95_low"] <= 0) & (stiffness["ci95_high"] >= 0)
+    assert spans_zero.any() and (stiffness["poorly_determined"] >= spans_zero).all()
     for name in ("S0-day1", "S1-day1"):
         assert (out / "sessions" / name / "results.json").is_file()
     assert (out / "figures" / "stiffness_pooled.png").is_file()

@@ -11,7 +11,8 @@ directory holds, per session, ``sessions/NAME/results.json`` and ``results.csv``
   ``status = "failed"`` and the reason as ``failure``;
 - ``pooled.parquet`` / ``pooled.csv``: per timing point and quantity, the mean over subjects of
   each subject's mean (over their sessions), the sd across subjects and a 95 % interval
-  (Student's t; none with one subject);
+  (Student's t; none with one subject), ``poorly_determined`` as in ``results.json`` (with two
+  subjects the interval is ±6.4 sd of the means: it often spans zero);
 - ``figures/``: stiffness against timing point per subject, and pooled.
 
 Nothing here imports the twin or numba. On a cluster, the workers must see the session files
@@ -190,9 +191,12 @@ _TRUTH = ("truth", "error", "error_percent", "covered")
 
 def pooled_table(group: pd.DataFrame) -> pd.DataFrame:
     """Per direction, timing point and quantity: mean over subjects of each subject's mean,
-    sd across subjects and a 95 % interval (Student's t)."""
+    sd across subjects, a 95 % interval (Student's t) and whether it is poorly determined
+    (:attr:`~anklelab.pipelines.walking.results.Estimate.poorly_determined`)."""
     import pandas as pd
     from scipy import stats
+
+    from anklelab.pipelines.walking.results import Estimate
 
     ok = group[group["status"] == "ok"] if "status" in group else group
     if ok.empty or "quantity" not in ok:
@@ -206,10 +210,12 @@ def pooled_table(group: pd.DataFrame) -> pd.DataFrame:
         sd = float(np.std(means, ddof=1)) if n > 1 else np.nan
         half = float(stats.t.ppf(0.975, n - 1) * sd / np.sqrt(n)) if n > 1 else np.nan
         mean = float(np.mean(means))
+        pooled = Estimate(mean, sd, (mean - half, mean + half))
         out.append(
             {"direction": direction, "delay_ms": delay, "quantity": quantity, "n_subjects": n,
              "n_sessions": int(part["size"].sum()), "mean": mean, "sd_between_subjects": sd,
-             "ci95_low": mean - half, "ci95_high": mean + half}
+             "ci95_low": mean - half, "ci95_high": mean + half,
+             "poorly_determined": pooled.poorly_determined}
         )  # fmt: skip
     return pd.DataFrame(out)
 
