@@ -20,17 +20,9 @@ from anklelab.errors import ParameterError, SessionFormatError
 from anklelab.forceplate import CHANNELS
 from anklelab.pipelines import WalkingSettings, analyze_walking
 from tests.c3d_files import write_c3d
-from tests.lab_twin import small_twin
+from tests.lab_twin import small_twin, with_twin_delay
 
 MAP = Path(__file__).parents[1] / "examples" / "maps" / "c3d_kistler.toml"
-
-
-def _twin_map(tmp_path, session, old="", new=""):
-    """The shipped map (which leaves delay_ms at 0) with the twin's amplifier delay."""
-    delay = f"delay_ms = {session.info.force_delay_ms!r}"
-    text = MAP.read_text().replace("delay_ms = 0.0", delay).replace(old, new)
-    (tmp_path / "twin_map.toml").write_text(text)
-    return tmp_path / "twin_map.toml"
 
 
 # paper 000's analysis for both: the comparison is of the data. With a few trials per point the
@@ -114,7 +106,7 @@ def twin(tmp_path_factory):
 
 def test_c3d_round_trip_gives_the_native_stiffness(twin, tmp_path):
     session, root, native = twin
-    imported = import_c3d(root, _twin_map(tmp_path, session))
+    imported = import_c3d(root, with_twin_delay(MAP, session, tmp_path))
     plate = imported.info.force_plate
     assert plate.type == "kistler8" and plate.anterior_axis == "+x"
     assert (plate.a_m, plate.b_m, plate.az0_m) == pytest.approx(
@@ -133,7 +125,7 @@ def test_c3d_round_trip_gives_the_native_stiffness(twin, tmp_path):
 def test_c3d_plate_stored_as_six_axis_or_grf_cop(twin, tmp_path, kind):
     session, root, native = twin
     text = ('type = "kistler8"', f'type = "{kind}"')
-    imported = import_c3d(root, _twin_map(tmp_path, session, *text))
+    imported = import_c3d(root, with_twin_delay(MAP, session, tmp_path, *text))
     assert imported.info.force_plate.type == kind
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")

@@ -19,7 +19,7 @@ from anklelab.data.matlab_map import import_matlab
 from anklelab.errors import AnklelabError, ParameterError, SessionFormatError
 from anklelab.forceplate import CHANNELS
 from anklelab.pipelines import WalkingSettings, analyze_walking
-from tests.lab_twin import small_twin
+from tests.lab_twin import small_twin, with_twin_delay
 
 MAP = Path(__file__).parents[1] / "examples" / "maps" / "matlab_grf_cop.toml"
 # paper 000's analysis for both: the comparison is of the data. With a few trials per point the
@@ -103,10 +103,7 @@ def twin(tmp_path_factory):
 def test_shipped_map_reads_the_layout_and_gives_the_native_stiffness(twin, tmp_path):
     """The shipped map leaves delay_ms at 0; the twin's amplifier records 1.031 ms late."""
     session, path = twin
-    twin_map = tmp_path / "twin_map.toml"
-    delay = f"delay_ms = {session.info.force_delay_ms!r}"
-    twin_map.write_text(MAP.read_text().replace("delay_ms = 0.0", delay))
-    imported = import_matlab(path, twin_map)
+    imported = import_matlab(path, with_twin_delay(MAP, session, tmp_path))
     assert imported.info.subject == "S07" and imported.info.force_plate.type == "grf_cop"
     assert len(imported.calibration) == 2 and len(imported.walking) == len(session.walking)
     labels = {w.trial for w in imported.walking}

@@ -14,6 +14,7 @@ from anklelab.data import Recording, load_session, save_session
 from anklelab.errors import AnklelabWarning
 from anklelab.forceplate import CHANNELS, GrfCopPlate, SixAxisPlate, resultants
 from anklelab.pipelines import WalkingResults, WalkingSettings, analyze_walking
+from anklelab.pipelines.walking.checks import walking_direction
 from tests.lab_twin import small_twin
 
 # paper 000's analysis for both: the comparison is of the data. With a few trials per point the
@@ -141,6 +142,9 @@ def test_grf_cop_without_calibration_cop_is_flagged(twin):
             for quantity in ("stiffness_nm_per_rad", "damping_nms_per_rad", "inertia_kgm2"):
                 assert point[quantity]["poorly_determined"] and point[quantity]["bias_unknown"]
             assert "bias_unknown" not in point["vaf_percent"]
+            # flagged before the point is judged: its warning, and no verdict on its change
+            assert any("stiffness is poorly determined" in w for w in point["warnings"])
+            assert point["stiffness_change_verdict"] == "undetermined"
         again = WalkingResults.from_dict(document)
         assert all(tp.stiffness.poorly_determined for tp in again.timing_points)
     assert errors[(0.4, 2.0)] < 0.015 < errors[(0.0, 0.0)]
@@ -169,3 +173,28 @@ def test_text_labels_analyse_exactly_like_integer_labels(twin, tmp_path):
         assert list(results.stance.metadata["trial"]) == [
             w.trial for i, w in enumerate(text.walking) if i in set(results.stance.selection)
         ]
+
+
+def test_the_walking_direction_check_reads_a_lab_frame_walking_along_minus_y(twin):
+    """Exported as GRF/COP in a lab frame whose walking direction is -y: declared so, no
+    warning, even with the COP blanked at each trial's force peak; declared +x (a quarter turn
+    off), the COP is named as travelling across."""
+    session, _native = twin
+    exported = grf_cop(session, 0.0, (0.4, 2.0))
+    assert exported.info.force_plate.anterior_axis == "-y"
+    assert walking_direction(exported) == []
+
+    def blank_peak(recording):
+        columns = dict(recording.columns)
+        peak = int(np.argmax(columns["grf_z_n"]))
+        for name in ("cop_x_m", "cop_y_m"):
+            columns[name] = columns[name].copy()
+            columns[name][peak] = np.nan
+        return Recording(recording.name, columns)
+
+    walking = [dataclasses.replace(t, recording=blank_peak(t.recording)) for t in exported.walking]
+    assert walking_direction(dataclasses.replace(exported, walking=tuple(walking))) == []
+    turned = exported.info.force_plate.model_copy(update={"anterior_axis": "+x"})
+    info = dataclasses.replace(exported.info, force_plate=turned)
+    (message,) = walking_direction(dataclasses.replace(exported, info=info))
+    assert "probably the plate's y axis (anterior_axis '+y' or '-y')" in message

@@ -55,7 +55,7 @@ def test_report_of_an_analyze_output_renders_in_chromium(analysed):
     )
     assert f"<td>{first['direction']}/{first['delay_ms']:g}</td>" in page and cell in page
     assert "Testing machine (bench)" in page and "Figures not found" not in page
-    named = f"{document['subject']} {document['session']}"  # twin-prosthetic session.h5
+    named = f"{document['subject']} — {document['session']}"  # twin-prosthetic — session.h5
     assert f"<h1>Walking impedance: {named}</h1>" in page
     assert "session SHA-256" in page and document["session_sha256"] in page
     seen = view(analysed / "report.html", "report_cli_walking.png")

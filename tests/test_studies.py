@@ -269,6 +269,12 @@ def test_batch_analyses_sessions_into_a_group_table(tmp_path):
     stiffness = pooled[(pooled["quantity"] == "stiffness_nm_per_rad") & (pooled["n_subjects"] == 2)]
     spans_zero = (stiffness["ci95_low"] <= 0) & (stiffness["ci95_high"] >= 0)
     assert spans_zero.any() and (stiffness["poorly_determined"] >= spans_zero).all()
+    # and wherever a session's own estimate is poorly determined (one subject: no interval)
+    keys = ["direction", "delay_ms", "quantity"]
+    members = group[group["status"] == "ok"].groupby(keys)["poorly_determined"].max()
+    joined = pooled.set_index(keys)["poorly_determined"].astype(bool)
+    flagged = members.reindex(joined.index).fillna(0).astype(bool)
+    assert flagged.any() and (joined >= flagged).all()
     for name in ("S0-day1", "S1-day1"):
         assert (out / "sessions" / name / "results.json").is_file()
     assert (out / "figures" / "stiffness_pooled.png").is_file()

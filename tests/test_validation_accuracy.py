@@ -4,7 +4,7 @@ a malformed protocol item is named before any session is generated."""
 from __future__ import annotations
 
 import pytest
-from validation.accuracy import generate, parse_protocol
+from validation.accuracy import generate, main, parse_protocol
 
 
 def test_a_changed_protocol_reaches_the_clean_room_session():
@@ -33,6 +33,15 @@ def test_a_malformed_protocol_item_is_named(item):
         parse_protocol([item])
 
 
+def test_a_protocol_is_checked_whole_before_anything_is_generated():
+    with pytest.raises(SystemExit, match=r"--protocol: onset_jitter_sd_s: expected one value"):
+        parse_protocol(["timing_points_ms=(150.0, 300.0, 450.0)"])
+
+
 def test_the_twin_takes_no_protocol():
+    """Refused before the sessions are handed to worker processes (where an exit would be lost
+    and the pool would wait for it forever)."""
     with pytest.raises(SystemExit, match="only the cleanroom generator"):
+        main(["--generator", "twin", "--sessions", "1", "--protocol", "ramp_s=0.05"])
+    with pytest.raises(ValueError, match="only the cleanroom generator"):
         generate("twin", "random", 0, (("ramp_s", 0.05),))

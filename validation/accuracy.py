@@ -55,7 +55,7 @@ def generate(generator: str, kind: str, seed: int, protocol: Protocol = ()) -> A
         from anklelab.experiments import simulate_randomised
 
         if protocol:
-            raise SystemExit("error: --protocol: only the cleanroom generator takes it")
+            raise ValueError("--protocol: only the cleanroom generator takes it")
         return simulate_randomised(seed, kind=kind, time_courses=False)
     if generator == "cleanroom":
         from validation.cleanroom import draw_config
@@ -72,7 +72,8 @@ def generate(generator: str, kind: str, seed: int, protocol: Protocol = ()) -> A
 
 
 def parse_protocol(items: Sequence[str]) -> Protocol:
-    """``NAME=VALUE`` items (values as Python literals) as :data:`Protocol` pairs."""
+    """``NAME=VALUE`` items (values as Python literals) as :data:`Protocol` pairs, checked by
+    the clean-room protocol's own validation (on its defaults) before anything is generated."""
     from validation.cleanroom.config import ProtocolConfig
 
     known = {field.name for field in dataclasses.fields(ProtocolConfig)}
@@ -89,6 +90,10 @@ def parse_protocol(items: Sequence[str]) -> Protocol:
                 f"protocol ({', '.join(sorted(known))}) and VALUE a Python literal; got {item!r}"
             )
         pairs.append((name, value))
+    try:
+        dataclasses.replace(ProtocolConfig(), **dict(pairs))
+    except (TypeError, ValueError) as exc:
+        raise SystemExit(f"error: --protocol: {exc}") from None
     return tuple(pairs)
 
 
@@ -347,10 +352,14 @@ def main(argv: Sequence[str] | None = None) -> None:
         return
     seeds = range(args.first_seed, args.first_seed + args.sessions)
     protocol = parse_protocol(args.protocol)
+    if protocol and args.generator != "cleanroom":
+        raise SystemExit("error: --protocol: only the cleanroom generator takes it")
     rows = run(args.generator, args.kind, seeds, args.settings, args.cache, args.workers, protocol)
     if args.out:
         write_rows(args.out, rows)
     print(summarise(rows))
+    if any(row.get("error") for row in rows):
+        raise SystemExit(1)  # the failed sessions are named in the summary
 
 
 if __name__ == "__main__":

@@ -29,8 +29,9 @@ __all__ = [
 ]
 
 EXTRAPOLATION_MARGIN_M = 0.005
-"""A lever arm this far beyond the tested distances, m, is :func:`extrapolated` (closer, the
-bench line is as good as measured there: a walking lever arm is known to a few millimetres)."""
+"""A lever arm more than this beyond the tested distances, m, is :func:`extrapolated` (closer,
+the bench line there is as good as a measurement; a walking lever arm itself is known only to
+several millimetres, see the walking guide)."""
 
 
 class BenchStiffness(NamedTuple):
@@ -147,13 +148,16 @@ def extrapolated(
     rows: Sequence[BenchStiffness], distance_m: float, margin_m: float = EXTRAPOLATION_MARGIN_M
 ) -> bool:
     """Whether ``distance_m`` lies more than ``margin_m`` outside the tested distances, where
-    :func:`interpolate_stiffness` extends the bench line instead of interpolating measurements.
+    :func:`interpolate_stiffness` extends the bench line instead of interpolating measurements
+    (False without bench tests or with an unknown distance).
 
     Examples
     --------
     >>> rows = [BenchStiffness(0.06, 1300.0, 1.0, 5), BenchStiffness(0.11, 975.0, 1.0, 5)]
-    >>> [extrapolated(rows, d) for d in (0.0599, 0.054, 0.11, 0.12)]
-    [False, True, False, True]
+    >>> [extrapolated(rows, d) for d in (0.0599, 0.054, 0.11, 0.12, float("nan"))]
+    [False, True, False, True, False]
     """
     tested = [row.distance_m for row in rows]
+    if not tested or not np.isfinite(distance_m):
+        return False
     return not min(tested) - margin_m <= distance_m <= max(tested) + margin_m

@@ -150,6 +150,17 @@ class ResultFiles:
         return read_inside(self.directory, name, limit=limit)
 
 
+def _run_name(subject: str | None, session: str | None) -> str:
+    """``"S03 — day1.h5"``; one of them when the other is missing or names the same.
+
+    >>> _run_name("S03", "day1.h5"), _run_name("S03", "S03.h5"), _run_name(None, "s.h5")
+    ('S03 — day1.h5', 'S03.h5', 's.h5')
+    """
+    if subject and session and Path(session).stem != subject:
+        return f"{subject} — {session}"
+    return session or subject or ""
+
+
 def load_results(path: Path, required: Sequence[str]) -> dict[str, Any]:
     """Read a result JSON file (a regular file) and check its top-level ``required`` keys.
 
@@ -491,7 +502,7 @@ def results_report(
         if name == "results.json":
             sections += walking_sections(document, directory, figures=found)
             metadata = run_metadata(document, directory)
-            named = " ".join(filter(None, [document.get("subject"), document.get("session")]))
+            named = _run_name(document.get("subject"), document.get("session"))
             title = f"Walking impedance: {named}" if named else "Walking impedance"
         else:
             sections.append(friction_section(document, directory, figures=found))

@@ -11,8 +11,9 @@ directory holds, per session, ``sessions/NAME/results.json`` and ``results.csv``
   ``status = "failed"`` and the reason as ``failure``;
 - ``pooled.parquet`` / ``pooled.csv``: per timing point and quantity, the mean over subjects of
   each subject's mean (over their sessions), the sd across subjects and a 95 % interval
-  (Student's t; none with one subject), ``poorly_determined`` as in ``results.json`` (with two
-  subjects the interval is ±6.4 sd of the means: it often spans zero);
+  (Student's t; none with one subject), and ``poorly_determined`` when that interval is, as in
+  ``results.json``, or any session's estimate is (with two subjects the half-width is 6.35
+  times the difference of their means: it often spans zero);
 - ``figures/``: stiffness against timing point per subject, and pooled.
 
 Nothing here imports the twin or numba. On a cluster, the workers must see the session files
@@ -191,8 +192,9 @@ _TRUTH = ("truth", "error", "error_percent", "covered")
 
 def pooled_table(group: pd.DataFrame) -> pd.DataFrame:
     """Per direction, timing point and quantity: mean over subjects of each subject's mean,
-    sd across subjects, a 95 % interval (Student's t) and whether it is poorly determined
-    (:attr:`~anklelab.pipelines.walking.results.Estimate.poorly_determined`)."""
+    sd across subjects, a 95 % interval (Student's t) and whether it is poorly determined (the
+    interval by :attr:`~anklelab.pipelines.walking.results.Estimate.poorly_determined`, or any
+    session's estimate)."""
     import pandas as pd
     from scipy import stats
 
@@ -202,7 +204,11 @@ def pooled_table(group: pd.DataFrame) -> pd.DataFrame:
     if ok.empty or "quantity" not in ok:
         return pd.DataFrame(columns=["direction", "delay_ms", "quantity", "n_subjects"])
     keys = ["direction", "delay_ms", "quantity"]
-    per_subject = ok.groupby([*keys, "subject"], sort=True)["estimate"].agg(["mean", "size"])
+    by_subject = ok.groupby([*keys, "subject"], sort=True)
+    per_subject = by_subject["estimate"].agg(["mean", "size"])
+    per_subject["flagged"] = by_subject["poorly_determined"].agg(
+        lambda f: bool(f.astype(bool).any())
+    )
     out = []
     for (direction, delay, quantity), part in per_subject.groupby(level=keys, sort=True):
         means = part["mean"].to_numpy(float)
@@ -215,7 +221,7 @@ def pooled_table(group: pd.DataFrame) -> pd.DataFrame:
             {"direction": direction, "delay_ms": delay, "quantity": quantity, "n_subjects": n,
              "n_sessions": int(part["size"].sum()), "mean": mean, "sd_between_subjects": sd,
              "ci95_low": mean - half, "ci95_high": mean + half,
-             "poorly_determined": pooled.poorly_determined}
+             "poorly_determined": pooled.poorly_determined or bool(part["flagged"].any())}
         )  # fmt: skip
     return pd.DataFrame(out)
 

@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import warnings
 from collections.abc import Callable
-from dataclasses import replace
 
 import numpy as np
 
@@ -27,7 +26,7 @@ from anklelab.pipelines.walking.checks import (
 )
 from anklelab.pipelines.walking.impedance import condition_order, estimate_timing_point
 from anklelab.pipelines.walking.responses import condition_responses, outliers
-from anklelab.pipelines.walking.results import TimingPoint, WalkingResults
+from anklelab.pipelines.walking.results import WalkingResults
 from anklelab.pipelines.walking.settings import WalkingSettings
 from anklelab.pipelines.walking.stance import drop_summary, reason_kind, samples, stance_trials
 from anklelab.signals import Trials
@@ -35,7 +34,6 @@ from anklelab.signals import Trials
 __all__ = ["STEPS", "analyze_walking"]
 
 _SCREENED = ("torque", "angle", "grf_z")  # unperturbed stance channels screened for outliers
-_IMPEDANCE = ("stiffness", "damping", "inertia")
 STEPS = ("platform filters", "walking trials", "ensembles and bootstrap", "bench")
 """Names of the pipeline's steps, in order (reported to the ``progress`` callback)."""
 
@@ -70,6 +68,12 @@ def analyze_walking(
     WalkingResults
     """
     settings = settings or WalkingSettings()
+    if all(trial.perturbed for trial in session.walking):
+        raise SessionFormatError(
+            "walking/trials.csv: no unperturbed trials (perturbed = 0): their average stance is "
+            "what the analysis subtracts from the perturbed trials (paper 000 interleaves them); "
+            "a session needs some"
+        )
     report = progress or (lambda step: None)
     fs = session.info.sample_rate_hz
     report(STEPS[0])
@@ -94,12 +98,6 @@ def analyze_walking(
     drops = "; ".join(
         [*mislabelled, f"drop reasons: {drop_summary(stance.drop_log, session.walking)}"]
     )
-    if not any(not trial.perturbed for trial in session.walking):
-        raise SessionFormatError(
-            "walking/trials.csv: no unperturbed trials (perturbed = 0): their average stance is "
-            "what the analysis subtracts from the perturbed trials (paper 000 interleaves them); "
-            "a session needs some"
-        )
     if len(unperturbed) == 0:
         raise SessionFormatError(
             "walking/trials.csv: no usable unperturbed trials, so the walking profile cannot be "
@@ -123,10 +121,12 @@ def analyze_walking(
         if responses.dropped:
             wild = np.isin(stance.selection, list(responses.dropped))
             stance = stance.drop(wild, [responses.dropped[p] for p in stance.selection[wild]])
-        points.append(estimate_timing_point(responses, key, len(unperturbed), settings, rng))
+        points.append(
+            estimate_timing_point(
+                responses, key, len(unperturbed), settings, rng, bias_unknown=bool(uncorrected)
+            )
+        )
     points = pool_changes(points, settings, samples(settings.window_ms, stance.fs) / stance.fs)
-    if uncorrected:
-        points = [_with_unknown_bias(point) for point in points]
     report(STEPS[3])
     held_out = len(session.calibration) > 1
     bench = bench_stiffness(session.bench)
@@ -152,13 +152,6 @@ def analyze_walking(
         filter_vaf_by_channel=filter_vaf_by_channel,
         stance=stance,
     )
-
-
-def _with_unknown_bias(point: TimingPoint) -> TimingPoint:
-    """``point`` with its impedance flagged as carrying a bias its intervals cannot bound (the
-    platform's own moment left in the torque, :func:`~.calibration.uncorrected_moment`)."""
-    flagged = {q: replace(getattr(point, q), bias_unknown=True) for q in _IMPEDANCE}
-    return replace(point, **flagged)
 
 
 def _drop_unperturbed_outliers(stance: Trials, limit: float) -> Trials:

@@ -285,7 +285,8 @@ def pool_changes(
             estimate.change,
             sd(estimate.samples) if estimate.samples.size else np.nan,
             (estimate.change - half, estimate.change + half),
-            samples=estimate.samples,
+            estimate.samples,
+            bias_unknown=point.stiffness.bias_unknown,
         )
         out.append(_judged(point, change, estimate.n_trials, settings, window_s))
     return out

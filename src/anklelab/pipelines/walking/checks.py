@@ -39,6 +39,7 @@ LOADED_FRACTION = 0.5
 """:func:`walking_direction` reads the COP where the vertical force exceeds this fraction of its
 peak (the COP of a lightly loaded plate is noisy)."""
 _DIRECTION_TRIALS = 50  # unperturbed trials read by walking_direction
+_ACROSS_FACTOR = 2.0  # it warns when the COP travels this many times farther across than along
 FOOT_LENGTH_M = 0.30
 """A lever arm farther than this from the heel-contact point lies beyond any foot's toes."""
 _HEEL_MARGIN_M = 0.02  # a COP may sit slightly behind the heel-contact point
@@ -79,7 +80,7 @@ def plausibility(points: Sequence[TimingPoint], heel_to_ankle_m: float) -> list[
                 "implausible for an ankle: check the geometry's units (metres) and the "
                 "channels for glitches"
             )
-        elif k < MIN_STIFFNESS_NM_PER_RAD:
+        elif k < MIN_STIFFNESS_NM_PER_RAD and not tp.stiffness.ci95[1] >= MIN_STIFFNESS_NM_PER_RAD:
             messages.append(
                 f"{tp.key}: stiffness {k:.1f} N·m/rad is below {MIN_STIFFNESS_NM_PER_RAD:.0f}, "
                 "implausible for an ankle loaded in stance: check anterior_axis (a plate "
@@ -107,20 +108,24 @@ def walking_direction(session: Session) -> list[str]:
     Heel to toe, the COP of a loaded foot moves 10-20 cm along the walking direction and a few
     centimetres across it. In up to 50 unperturbed trials, the COP's range along and across the
     plate's ``anterior_axis`` is read where the vertical force exceeds
-    :data:`LOADED_FRACTION` of the trial's peak; when the medians say it moves farther across,
-    ``anterior_axis`` names the wrong plate axis (the sign is checked by the lever arms).
+    :data:`LOADED_FRACTION` of the trial's peak (and the COP is defined); when the medians say
+    it moves more than twice as far across, ``anterior_axis`` names the wrong plate axis (the
+    sign is checked by the lever arms). On 72 clean-room and 60 twin sessions of every mounting
+    the ratio was at most 0.18.
     """
     plate = session.info.force_plate
     trials = [t.recording for t in session.walking if not t.perturbed][:_DIRECTION_TRIALS]
     along, across = [], []
-    for recording in trials:
-        load = plate.lab_load(recording.stack(plate.channels))
-        loaded = load.grf_z > LOADED_FRACTION * np.max(load.grf_z, initial=0.0)
-        if loaded.sum() < 2:
-            continue
-        along.append(np.ptp(np.nan_to_num(load.cop_x[loaded])))
-        across.append(np.ptp(np.nan_to_num(load.cop_y[loaded])))
-    if not along or np.median(across) <= np.median(along):
+    with np.errstate(invalid="ignore"):  # NaN (no COP) is never loaded
+        for recording in trials:
+            load = plate.lab_load(recording.stack(plate.channels))
+            peak = np.nanmax(load.grf_z, initial=0.0)
+            loaded = (load.grf_z > LOADED_FRACTION * peak) & np.isfinite(load.cop_x + load.cop_y)
+            if loaded.sum() < 2:
+                continue
+            along.append(np.ptp(load.cop_x[loaded]))
+            across.append(np.ptp(load.cop_y[loaded]))
+    if not along or np.median(across) <= _ACROSS_FACTOR * np.median(along):
         return []
     axis = plate.anterior_axis
     other = "y" if axis[1] == "x" else "x"
@@ -145,12 +150,16 @@ def extrapolated_bench(points: Sequence[TimingPoint], bench: Sequence[BenchStiff
         return []
     low, high = min(b.distance_m for b in bench), max(b.distance_m for b in bench)
     named = ", ".join(f"{tp.key} ({100 * tp.cop_m:.1f} cm)" for tp in outside)
+    tested, read = (
+        (f"distances ({100 * low:.1f} to {100 * high:.1f} cm)", "the bench line extended")
+        if high > low
+        else (f"single distance ({100 * low:.1f} cm)", "that distance's")
+    )
     return [
         f"validation: the lever arms of {named} lie more than {1000 * EXTRAPOLATION_MARGIN_M:g} "
-        f"mm outside the bench tests' actuator distances ({100 * low:.1f} to {100 * high:.1f} "
-        "cm), so their bench stiffness is the bench line extended, not measured "
-        "(bench_extrapolated in results.json); the lever arm itself rests on the COP at heel "
-        "contact (see the walking guide)"
+        f"mm outside the bench tests' actuator {tested}, so their bench stiffness is {read}, "
+        "not measured there (bench_extrapolated in results.json); the lever arm itself rests "
+        "on the COP at heel contact (see the walking guide)"
     ]
 
 

@@ -187,6 +187,7 @@ def _estimate(
     paper: slice,
     n_trials: int,
     systematic: float = 0.0,
+    bias_unknown: bool = False,
 ) -> Estimate:
     """An :class:`Estimate` from stacked values: all-trial, ``n_reps`` resamples, paper subsets.
 
@@ -195,14 +196,16 @@ def _estimate(
     spread of their mean (by ``(n-1)/n`` in variance) and the tails are Student's, not normal
     (1.58× the normal interval for 5 trials, 1.04× for 50). An sd settles with far fewer
     resamples than the 2.5 and 97.5 percentiles do. A ``systematic`` half-width (what the data
-    cannot pin down, :func:`_systematic`) is added in quadrature.
+    cannot pin down, :func:`_systematic`) is added in quadrature; a bias that nothing bounds
+    is flagged (``bias_unknown``).
     """
     centre, resampled, subsets = float(values[_FULL]), values[1 : 1 + n_reps], values[paper]
-    if n_reps < 2 or n_trials < 2:
-        return Estimate(centre, sd(subsets), (np.nan, np.nan), samples=subsets)
-    random = t_quantile(n_trials - 1, 0.975) * np.sqrt(n_trials / (n_trials - 1)) * sd(resampled)
-    half = float(np.hypot(random, systematic))
-    return Estimate(centre, sd(subsets), (centre - half, centre + half), samples=subsets)
+    interval = (np.nan, np.nan)
+    if n_reps >= 2 and n_trials >= 2:
+        scale = t_quantile(n_trials - 1, 0.975) * np.sqrt(n_trials / (n_trials - 1))
+        half = float(np.hypot(scale * sd(resampled), systematic))
+        interval = (centre - half, centre + half)
+    return Estimate(centre, sd(subsets), interval, subsets, bias_unknown=bias_unknown)
 
 
 def estimate_timing_point(
@@ -211,6 +214,8 @@ def estimate_timing_point(
     n_unperturbed: int,
     settings: WalkingSettings,
     seed: int | np.random.Generator,
+    *,
+    bias_unknown: bool = False,
 ) -> TimingPoint:
     """Impedance of condition ``key`` (``"dorsi/225"``) from its adjusted responses.
 
@@ -226,6 +231,10 @@ def estimate_timing_point(
         Windows, stiffness model, resampling and diagnostic settings.
     seed : int or numpy.random.Generator
         Draws the resamples and subsets (a Generator continues its stream).
+    bias_unknown : bool
+        The torque carries a bias the intervals cannot bound (the platform's own moment left in
+        it, :func:`~.calibration.uncorrected_moment`): the impedance, its slope and its change
+        are flagged (poorly determined), before the change is judged.
     """
     rng = np.random.default_rng(seed)
     trials = responses.perturbed
@@ -255,7 +264,7 @@ def estimate_timing_point(
     )
     window_s = n / fs
     change = linear.stiffness_slope[0] * window_s / linear.stiffness[0]
-    change_estimate = _estimate(change, reps, paper, len(trials))
+    change_estimate = _estimate(change, reps, paper, len(trials), bias_unknown=bias_unknown)
     full = averages[_FULL : _FULL + 1]
     shift = round(settings.timing_uncertainty_ms * fs / 1000.0)
     lag = settings.coupler_lag_ms * fs / 1000.0
@@ -284,7 +293,14 @@ def estimate_timing_point(
             full, responses.twist_torque, n, name, shift, lag, fs, centre, windows_fit
         )
     estimates = {
-        q: _estimate(getattr(fitted[name], q)[0], reps, paper, len(trials), systematic.get(q, 0.0))
+        q: _estimate(
+            getattr(fitted[name], q)[0],
+            reps,
+            paper,
+            len(trials),
+            systematic.get(q, 0.0),
+            bias_unknown and q in _SYSTEMATIC,
+        )
         for q, name in source.items()
     }
     vaf = estimates["vaf"]  # a VAF cannot exceed 100 %
@@ -308,7 +324,9 @@ def estimate_timing_point(
         stiffness_change_probability=probability,
         stiffness_change_verdict=verdict,
         stiffness_slope=(
-            _estimate(linear.stiffness_slope[0], reps, paper, len(trials))
+            _estimate(
+                linear.stiffness_slope[0], reps, paper, len(trials), bias_unknown=bias_unknown
+            )
             if model == "linear"
             else None
         ),

@@ -77,18 +77,19 @@ class Estimate:
         random error only and understates the estimate's standard error (~0.8×).
     ci95 : (float, float)
         95 % interval from the resampling of :mod:`.impedance` (NaN if not computed).
-    bias_unknown : bool
-        The estimate carries a bias that the interval cannot bound (the session's warnings say
-        why, e.g. a platform moment the filters could not learn); it is then poorly determined.
     samples : ndarray
         The subset values ``sd`` is taken over (in memory only).
+    bias_unknown : bool
+        (Keyword only.) The estimate carries a bias that the interval cannot bound (the
+        session's warnings say why, e.g. a platform moment the filters could not learn); it is
+        then poorly determined.
     """
 
     mean: float
     sd: float
     ci95: tuple[float, float] = (np.nan, np.nan)
-    bias_unknown: bool = False
     samples: NDArray[np.float64] = field(default_factory=_empty, repr=False, compare=False)
+    bias_unknown: bool = field(default=False, kw_only=True)
 
     @property
     def poorly_determined(self) -> bool:
@@ -443,6 +444,7 @@ class WalkingResults:
             match = check.get(tp.delay_ms) if tp.direction == "dorsi" else None
             row["bench_stiffness_nm_per_rad"] = match and match["bench_stiffness_nm_per_rad"]
             row["error_percent"] = match and match["error_percent"]
+            row["bench_extrapolated"] = match and int(match["bench_extrapolated"])
             rows.append(_finite(row))
         columns = dict.fromkeys(key for row in rows for key in row)  # the slope is per point
         return [{key: row.get(key) for key in columns} for row in rows]
