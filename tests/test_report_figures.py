@@ -210,6 +210,20 @@ def test_the_key_figure_draws_flags_hollow_and_the_paper():
     ]
 
 
+@pytest.mark.parametrize("x", ["timing", "lever_arm"])
+def test_paper_000_is_drawn_beside_a_session_with_bench_tests_only(x):
+    """Paper 000's values are its prosthetic foot's on its testing machine: beside a session
+    without bench tests (a human ankle) they are no reference."""
+    import dataclasses
+
+    without = dataclasses.replace(_results((1180.0, 1230.0)), bench=[])
+    for results, drawn in ((_results((1180.0, 1230.0)), True), (without, False)):
+        fig = impedance_figure(results, x=x)
+        legend = " ".join(t.get_text() for t in fig.legends[0].get_texts())
+        assert ("paper 000" in legend) == drawn
+        assert problems(fig) == []
+
+
 def test_settings_read_as_words_with_units():
     assert readable_name("cutoff_hz") == "low-pass cut-off (Hz)"
     assert readable_name("new_window_ms") == "new window (ms)"

@@ -187,6 +187,9 @@ def impedance_figure(
 ) -> Figure:
     """Stiffness, damping and inertia per condition, with intervals, the paper and the bench.
 
+    Paper 000's values (a prosthetic foot on its testing machine) are drawn beside a session
+    with bench tests only: beside a human ankle's they are no reference and crowd the scale.
+
     Parameters
     ----------
     results : WalkingResults
@@ -224,7 +227,7 @@ def impedance_figure(
                 delays + offsets["bench"], bench, "s", color="black", mfc="none", ms=7, zorder=2
             )
             handles["bench, interpolated at the lever arm"] = line
-        if direction == "dorsi":
+        if direction == "dorsi" and results.bench:
             # paper 000 gives its walking stiffness by timing point, not by lever arm
             shown = delays + offsets["paper"] if x == "timing" else np.full_like(delays, np.nan)
             x_of = dict(zip(delays.tolist(), shown.tolist(), strict=True))
@@ -243,14 +246,14 @@ def impedance_figure(
                 zorder=2,
             )
             handles["bench (testing machine)"] = line
-        near, far = (
-            PAPER_000["bench_stiffness_near_nm_per_rad"],
-            PAPER_000["bench_stiffness_far_nm_per_rad"],
-        )
-        (line,) = axes[0].plot(
-            [6.0, 11.0], [near.value, far.value], "^:", color="0.5", lw=1.5, ms=7
-        )
-        handles["paper 000, bench (6–11 cm)"] = line
+            near, far = (
+                PAPER_000["bench_stiffness_near_nm_per_rad"],
+                PAPER_000["bench_stiffness_far_nm_per_rad"],
+            )
+            (line,) = axes[0].plot(
+                [6.0, 11.0], [near.value, far.value], "^:", color="0.5", lw=1.5, ms=7
+            )
+            handles["paper 000, bench (6–11 cm)"] = line
     if any(getattr(tp, q.name).poorly_determined for tp in every for q in IMPEDANCE):
         handles["poorly determined (hollow, grey, ?)"] = axes[0].errorbar(
             [], [], yerr=[], fmt="o", color=_FLAGGED, mfc="white", capsize=3
