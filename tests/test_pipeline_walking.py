@@ -752,6 +752,9 @@ def test_cli_counts_mislabelled_trials_and_prints_the_warning(early_late, tmp_pa
         "more than 50 ms)" in text
     )
     assert "warning: walking/trials.csv: dorsi/100: all 6 perturbed trials were dropped" in text
+    # each warning one line, however long, so that it can be grepped and copied whole
+    (line,) = [w for w in result.output.splitlines() if w.startswith("warning: walking/")][:1]
+    assert line.endswith("are the delay_ms labels swapped?"), line
     assert "UserWarning" not in text and "AnklelabWarning" not in text
     doc = json.loads((out / "results.json").read_text())
     assert len(doc["warnings"]) == 2

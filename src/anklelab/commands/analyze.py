@@ -226,7 +226,8 @@ def analyze(
     )
     vague = _poorly_determined(results)
     if vague:
-        console.print(f"≈ poorly determined: {vague} (intervals in results.json)", markup=False)
+        line = f"≈ poorly determined: {vague} (intervals in results.json)"
+        console.print(line, markup=False, soft_wrap=True)
     point_warnings = [message for tp in results.timing_points for message in tp.warnings]
-    for message in (*results.warnings, *point_warnings):
-        console.print(f"warning: {message}", style="yellow", markup=False)
+    for message in (*results.warnings, *point_warnings):  # one line each, for grep and copying
+        console.print(f"warning: {message}", style="yellow", markup=False, soft_wrap=True)
