@@ -81,6 +81,18 @@ def test_session_info_table(session_dir):
         assert text in result.output
 
 
+def test_session_info_folds_a_hash_and_never_cuts_it(tmp_path):
+    session = random_session(n_calibration=1, n_walking=4, n_bench=0, seed=3)
+    path = save_session(session, tmp_path / "session", format="dir")
+    result = runner.invoke(app, ["session", "info", str(path)], env={"COLUMNS": "80"})
+    assert result.exit_code == 0, result.output
+    assert "…" not in result.output
+    lines = result.output.splitlines()
+    (at,) = [i for i, w in enumerate(lines) if "provenance.source_sha256" in w]
+    folded = lines[at].split()[-1] + lines[at + 1].strip()
+    assert re.fullmatch(r"[0-9a-f]{64}", folded), folded
+
+
 @pytest.mark.parametrize(("n_bench", "bench"), [(1, "1 test at 0.06 m"), (0, "0 tests")])
 def test_session_info_counts_are_pluralised(tmp_path, n_bench, bench):
     session = random_session(n_calibration=1, n_walking=4, n_bench=n_bench, seed=3)

@@ -39,7 +39,7 @@ def _table(summary: dict[str, Any]) -> Table:
     walking = summary["walking"]
     table = Table(show_header=False, box=None)
     table.add_column(style="bold")
-    table.add_column()
+    table.add_column(overflow="fold")  # a hash folds onto the next line, never cut short
     rows = [
         ("platform", info["platform"]),
         ("subject", info["subject"]),
