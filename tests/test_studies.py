@@ -237,6 +237,19 @@ def test_design_recommendation_reaches_the_target_when_simulated(tmp_path):
     assert widths.max() <= target, widths.to_dict()
 
 
+def test_a_batch_whose_every_session_fails_names_them_and_ends_cleanly(tmp_path):
+    from typer.testing import CliRunner
+
+    from anklelab.cli import app
+
+    broken = tmp_path / "S1" / "day1"
+    broken.mkdir(parents=True)
+    result = CliRunner().invoke(app, ["batch", str(broken), "--out", str(tmp_path / "out")])
+    assert result.exit_code == 1, result.output
+    assert "0 of 1 sessions analysed (0 subjects)" in result.output
+    assert "warning: day1: " in result.output and "Traceback" not in result.output
+
+
 def test_batch_analyses_sessions_into_a_group_table(tmp_path):
     from typer.testing import CliRunner
 

@@ -61,10 +61,12 @@ def batch(
         for source, sha256 in result.inputs.items():
             run.add_input(Path(source), sha256)
         run.add_input(settings_file)
-    n_subjects = result.group.loc[result.group["status"] == "ok", "subject"].nunique()
+    ok = result.group[result.group["status"] == "ok"] if "status" in result.group else []
+    n_subjects = ok["subject"].nunique() if len(ok) else 0
     typer.echo(
         f"{len(sessions) - len(result.failed)} of {len(sessions)} sessions analysed "
-        f"({n_subjects} subjects); group table in {out / 'group.csv'}"
+        f"({n_subjects} subject{'' if n_subjects == 1 else 's'}); group table in "
+        f"{out / 'group.csv'}"
     )
     for name, error in result.failed.items():
         typer.echo(f"warning: {name}: {error}", err=True)
