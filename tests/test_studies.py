@@ -342,3 +342,29 @@ def test_design_table_shows_the_recommended_count_instead_of_a_neighbour(capsys)
     rows = [line.split() for line in capsys.readouterr().out.splitlines()]
     counts = [int(row[0]) for row in rows if len(row) >= 3 and row[0].isdigit()]
     assert 122 in counts and 123 not in counts and counts == sorted(counts)
+
+
+def test_a_condition_of_one_trial_has_no_interval_and_is_poorly_determined():
+    """results.json gives it no ci95 (null); the tables once drew mean ± 1.96 sd of identical
+    subsets, a zero-width "interval" that counted as a miss in the coverage."""
+    import math
+
+    from anklelab.pipelines.walking.results import Estimate, TimingPoint, WalkingResults
+    from anklelab.pipelines.walking.settings import WalkingSettings
+    from anklelab.studies.rows import timing_point_rows
+
+    one = Estimate(1200.0, 1e-13)  # one trial: its subsets are all the same trial
+    many = Estimate(1200.0, 10.0, (1180.0, 1220.0))
+    points = [
+        TimingPoint(100.0, "dorsi", n, 20, 0.06, e, e, e, e, "constant", e, False)
+        for n, e in ((1, one), (30, many))
+    ]
+    document = WalkingResults(WalkingSettings(), {}, points, []).to_dict(session="s")
+    truth = {"stiffness_nm_per_rad": 1210.0}
+    rows = timing_point_rows(document, {"dorsi": {"100": truth}})
+    stiffness = {r["n_perturbed"]: r for r in rows if r["quantity"] == "stiffness_nm_per_rad"}
+    single, several = stiffness[1], stiffness[30]
+    assert single["poorly_determined"] is True and single["covered"] is None
+    assert math.isnan(single["ci95_low"]) and math.isnan(single["sd"])
+    assert single["interval_kind"] == "" and math.isnan(single["half_width_percent"])
+    assert several["covered"] is True and several["interval_kind"] == "ci95"

@@ -61,9 +61,10 @@ def timing_point_rows(
         Keys: ``direction``, ``delay_ms``, ``n_perturbed``, ``stiffness_model``,
         ``stiffness_changes``, ``stiffness_change_verdict``, ``quantity`` (its ``results.json``
         key), ``truth``, ``estimate``, ``sd``, ``ci95_low``, ``ci95_high``, ``interval_kind``,
-        ``poorly_determined`` (None for ``cop_m``), ``error``, ``error_percent``,
-        ``half_width_percent``, ``covered`` (truth inside the interval; None without an
-        interval or a truth), ``warnings``.
+        ``poorly_determined`` (None for ``cop_m``; True, with no sd and no interval, for a
+        condition of one trial), ``error``, ``error_percent``, ``half_width_percent``,
+        ``covered`` (truth inside the interval; None without an interval or a truth),
+        ``warnings``.
     """
     from anklelab.pipelines.walking.results import TimingPoint
 
@@ -84,6 +85,8 @@ def timing_point_rows(
             true = _number(truth.get(key))
             if estimate is None:
                 value, sd, low, high, kind, vague = tp.cop_m, math.nan, math.nan, math.nan, "", None
+            elif tp.n_perturbed < 2:  # one trial: no spread, no interval, nothing determined
+                value, sd, low, high, kind, vague = estimate.mean, math.nan, *_NO_INTERVAL, True
             else:
                 value, sd = estimate.mean, estimate.sd
                 low, high, kind = interval(value, sd, estimate.ci95)
@@ -113,6 +116,9 @@ def timing_point_rows(
                 }
             )
     return rows
+
+
+_NO_INTERVAL = (math.nan, math.nan, "")
 
 
 def _number(value: Any) -> float:
