@@ -368,3 +368,18 @@ def test_a_condition_of_one_trial_has_no_interval_and_is_poorly_determined():
     assert math.isnan(single["ci95_low"]) and math.isnan(single["sd"])
     assert single["interval_kind"] == "" and math.isnan(single["half_width_percent"])
     assert several["covered"] is True and several["interval_kind"] == "ci95"
+
+
+def test_an_unreadable_stored_result_is_named_and_computed_again(tmp_path):
+    from anklelab.errors import AnklelabWarning
+    from anklelab.studies.execute import ResultStore
+
+    store = ResultStore(tmp_path)
+    store.write("good", {"rows": [1, 2]})
+    (tmp_path / "cut.json").write_text('{"rows": [1, 2', encoding="utf-8")  # a file cut short
+    (tmp_path / "list.json").write_text("[1, 2]", encoding="utf-8")
+    assert store.has("good") and not store.has("missing")
+    with pytest.warns(AnklelabWarning, match=r"cut\.json: an earlier run's result is unreadable"):
+        assert not store.has("cut")
+    with pytest.warns(AnklelabWarning, match=r"list\.json: .*not a JSON object"):
+        assert not store.has("list")

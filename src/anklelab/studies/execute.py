@@ -25,6 +25,7 @@ import json
 import os
 import shutil
 import time
+import warnings
 from collections.abc import Callable, Iterator, Sequence
 from contextlib import contextmanager
 from dataclasses import dataclass
@@ -32,7 +33,7 @@ from pathlib import Path
 from typing import Any
 
 from anklelab._atomic import write_text_atomic
-from anklelab.errors import ParameterError
+from anklelab.errors import AnklelabWarning, ParameterError
 
 __all__ = [
     "LOCAL_CLUSTER",
@@ -67,7 +68,25 @@ class ResultStore:
         return self.directory / f"{key}.json"
 
     def has(self, key: str) -> bool:
-        return self.path(key).is_file()
+        """Whether ``key``'s result is stored and readable; an unreadable one (a file cut short
+        or edited by hand into something else) is named in a warning and computed again."""
+        path = self.path(key)
+        if not path.is_file():
+            return False
+        try:
+            readable = isinstance(self.read(key), dict)
+        except (ValueError, UnicodeDecodeError) as exc:  # JSONDecodeError is a ValueError
+            readable = False
+            reason = f"{type(exc).__name__}: {exc}"
+        else:
+            reason = "not a JSON object"
+        if not readable:
+            warnings.warn(
+                f"{path}: an earlier run's result is unreadable ({reason}); computing it again",
+                AnklelabWarning,
+                stacklevel=2,
+            )
+        return readable
 
     def read(self, key: str) -> dict[str, Any]:
         result: dict[str, Any] = json.loads(self.path(key).read_text(encoding="utf-8"))
