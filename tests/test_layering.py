@@ -27,6 +27,7 @@ RANK = {
     "forceplate": 0,
     "metrics": 0,
     "_student_t": 0,  # Student's t without SciPy: the analysis's intervals
+    "_session_limits": 0,  # the largest twin session simulated on request
     "iir": 0,  # filter designs and the zero-phase filter: the twin and the analysis share them
     "platforms": 1,
     "sim": 2,

@@ -87,6 +87,14 @@ def test_a_sample_is_drawn_from_its_own_seed():
         ({"grid": {"analysis.window_ms": [75.0, float("nan")]}}, r"window_ms\[1\]: .*finite"),
         ({"grid": {"twin.trials_per_point": [3, 5]}}, "fixed setting and in \\[grid\\]"),
         ({"grid": 1.5}, "\\[grid\\]: expected a table"),
+        (
+            {"twin": TINY["twin"] | {"unperturbed_per_point": 4.0}},
+            "n_unperturbed and unperturbed_per_point: give one of them",
+        ),
+        (
+            {"grid": {"twin.trials_per_point": [4, 100000]}, "twin": {"n_unperturbed": 6}},
+            "trials_per_point = 100000: .*less than or equal to 1000",
+        ),
     ],
 )
 def test_a_bad_study_file_is_one_clear_error_naming_the_key(change, match):
@@ -142,11 +150,13 @@ def test_the_study_table_holds_truth_estimate_interval_error_and_coverage(refere
         "stiffness_change_fraction", "cop_m",
     }  # fmt: skip
     stiffness = table[table["quantity"] == "stiffness_nm_per_rad"]
-    # the analysis's 95 % interval; a condition of one trial has none: mean ± 1.96 sd, named so
-    assert set(stiffness["interval_kind"]) == {"ci95", "mean±1.96sd"}
-    single = stiffness[stiffness["interval_kind"] == "mean±1.96sd"]
-    assert (single["n_perturbed"] == 1).all()
-    assert (stiffness["ci95_low"] <= stiffness["ci95_high"]).all()
+    # the analysis's 95 % interval; a condition of one trial has none, and is poorly determined
+    assert set(stiffness["interval_kind"]) == {"ci95", ""}
+    single = stiffness[stiffness["interval_kind"] == ""]
+    assert (single["n_perturbed"] == 1).all() and single["poorly_determined"].all()
+    assert single["ci95_low"].isna().all() and single["covered"].isna().all()
+    bounded = stiffness[stiffness["interval_kind"] == "ci95"]
+    assert (bounded["ci95_low"] <= bounded["ci95_high"]).all()
     assert set(stiffness["stiffness_model"]) <= {"constant", "linear"}
     assert stiffness["poorly_determined"].isin([True, False]).all()
     assert table.loc[table["quantity"] == "cop_m", "poorly_determined"].isna().all()

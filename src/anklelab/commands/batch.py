@@ -61,8 +61,9 @@ def batch(
         for source, sha256 in result.inputs.items():
             run.add_input(Path(source), sha256)
         run.add_input(settings_file)
-    ok = result.group[result.group["status"] == "ok"] if "status" in result.group else []
-    n_subjects = ok["subject"].nunique() if len(ok) else 0
+    group = result.group
+    analysed = group[group["status"] == "ok"] if "status" in group else group.iloc[:0]
+    n_subjects = analysed["subject"].nunique() if len(analysed) else 0
     typer.echo(
         f"{len(sessions) - len(result.failed)} of {len(sessions)} sessions analysed "
         f"({n_subjects} subject{'' if n_subjects == 1 else 's'}); group table in "

@@ -8,12 +8,10 @@ from typing import Annotated
 
 import typer
 
+from anklelab._session_limits import MAX_TRIALS_PER_POINT, MAX_UNPERTURBED
 from anklelab.commands._options import ForceOption, SeedOption, finite
 
 app = typer.Typer(help="Simulate experiments on the digital twins.", no_args_is_help=True)
-
-MAX_TRIALS_PER_POINT = 1000
-MAX_UNPERTURBED = 4000
 
 
 class Foot(StrEnum):

@@ -47,9 +47,10 @@ from pathlib import Path
 from typing import Any, Literal
 
 import numpy as np
-from pydantic import Field
+from pydantic import Field, model_validator
 
 from anklelab._params import Parameters, did_you_mean, read_parameter_document
+from anklelab._session_limits import MAX_TRIALS_PER_POINT, MAX_UNPERTURBED
 from anklelab._version import __version__
 from anklelab.errors import ParameterError
 
@@ -74,7 +75,8 @@ class TwinSettings(Parameters):
     foot : {"prosthetic", "human"}
         What walks on the plate (ignored when ``randomised`` draws the foot).
     trials_per_point, n_unperturbed, n_calibration
-        Protocol size; unset means the parameter set's (or, randomised, the draw's).
+        Protocol size; unset means the parameter set's (or, randomised, the draw's). At most
+        1000 trials per point and 4000 unperturbed trials, as ``simulate`` takes.
     unperturbed_per_point
         Instead of ``n_unperturbed``: that many unperturbed trials per perturbed trial of one
         timing point (paper 000: 400 for 100, so 4), so that the protocol scales as a whole when
@@ -92,14 +94,23 @@ class TwinSettings(Parameters):
     """
 
     foot: Literal["prosthetic", "human"] = "prosthetic"
-    trials_per_point: int | None = Field(None, ge=1)
-    n_unperturbed: int | None = Field(None, ge=1)
+    trials_per_point: int | None = Field(None, ge=1, le=MAX_TRIALS_PER_POINT)
+    n_unperturbed: int | None = Field(None, ge=1, le=MAX_UNPERTURBED)
     unperturbed_per_point: float | None = Field(None, gt=0)
     n_calibration: int | None = Field(None, ge=1)
     noise_scale: float = Field(1.0, ge=0)
     randomised: Literal["none", "prosthetic", "human", "random"] = "none"
     bench: bool | None = None
     artefacts: bool = True
+
+    @model_validator(mode="after")
+    def _one_unperturbed_count(self) -> TwinSettings:
+        if self.n_unperturbed is not None and self.unperturbed_per_point is not None:
+            raise ValueError(
+                "n_unperturbed and unperturbed_per_point: give one of them (both were given, "
+                "and one would be ignored)"
+            )
+        return self
 
 
 @dataclass(frozen=True)
