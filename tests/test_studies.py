@@ -393,3 +393,28 @@ def test_an_unreadable_stored_result_is_named_and_computed_again(tmp_path):
         assert not store.has("cut")
     with pytest.warns(AnklelabWarning, match=r"list\.json: .*not a JSON object"):
         assert not store.has("list")
+
+
+def test_the_design_fits_the_intervals_floor_and_names_a_target_below_it():
+    """Half-widths built as sqrt(100 / m + 2²) %: the fit finds c = 10 % and the 2 % floor that
+    more trials do not shrink; ±3 % then needs a condition's 9-in-10 share of trials to reach
+    20 (100 / 20 + 4 = 9), and ±1.5 % is out of reach."""
+    from scipy.stats import binom
+
+    from anklelab.studies.design import _answer
+
+    m = np.array([4.0, 8.0, 16.0, 32.0, 64.0])
+    rows = pd.DataFrame(
+        {"twin.trials_per_point": 2 * m, "seed": 0, "direction": "dorsi", "delay_ms": 100.0,
+         "n_perturbed": m, "half_width_percent": np.sqrt(100.0 / m + 4.0),
+         "error_percent": 0.0, "interval_kind": "ci95"}
+    )  # fmt: skip
+    design = _answer(rows, None, target=3.0, change=10.0, power=0.8)
+    (condition,) = design.conditions
+    assert condition["c_percent"] == pytest.approx(10.0) and condition["floor_percent"] == (
+        pytest.approx(2.0)
+    )
+    n = design.for_interval
+    assert binom.ppf(0.1, n, 0.5) >= 20 > binom.ppf(0.1, n - 1, 0.5)
+    with pytest.raises(ParameterError, match=r"±1\.5 % is out of reach at dorsi/100: .*±2\.00 %"):
+        _answer(rows, None, target=1.5, change=10.0, power=0.8)

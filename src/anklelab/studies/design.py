@@ -4,11 +4,15 @@ A study preset. Pilot sessions of the foot the user describes are simulated at a
 counts (several seeds each, the unperturbed trials scaled along, as in paper 000's 400 for 100
 per point) and analysed as lab data. For every condition (direction and timing point) the
 stiffness interval the analysis reports (its ``ci95``, else ``mean ± 1.96 sd``: see
-:mod:`anklelab.studies.rows`) is fitted by ``half-width = c / sqrt(m)``, ``m`` the condition's
-perturbed trials (random averages shrink so). Each trial of a timing point is dorsiflexing or
-plantarflexing at random, so a condition gets a binomial share of the ``n`` trials per timing
-point; the design holds for the share a condition gets in 9 sessions of 10 (the binomial's 10th
-percentile ``m10(n)``, about ``n/2 - 0.64 sqrt(n)``): ``half-width(n) = c / sqrt(m10(n))``.
+:mod:`anklelab.studies.rows`) is fitted by ``half-width² = c² / m + floor²``, ``m`` the
+condition's perturbed trials: the interval is the random part (random averages shrink as
+``1 / sqrt(m)``) and a systematic part (timing, the coupler's twist, the window) in quadrature,
+which more trials do not shrink (least squares on the squares, both parts non-negative). Each
+trial of a timing point is dorsiflexing or plantarflexing at random, so a condition gets a
+binomial share of the ``n`` trials per timing point; the design holds for the share a condition
+gets in 9 sessions of 10 (the binomial's 10th percentile ``m10(n)``, about
+``n/2 - 0.64 sqrt(n)``): ``half-width(n) = sqrt(c² / m10(n) + floor²)``. A target below a
+condition's floor is out of reach, and said so.
 Then:
 
 - **interval**: the smallest ``n`` whose predicted half-width is within ``±X %`` of the
@@ -190,6 +194,7 @@ def _ratio(params_file: Path | None) -> float:
 
 
 def _answer(rows: Any, run: StudyRun, target: float, change: float, power: float) -> Design:
+    from scipy.optimize import nnls
     from scipy.stats import binom, norm
 
     n = rows["twin.trials_per_point"].to_numpy(float)
@@ -197,23 +202,39 @@ def _answer(rows: Any, run: StudyRun, target: float, change: float, power: float
     # plantar at random: a condition gets about half); a bootstrap of fewer than 3 trials has
     # no spread to measure
     usable = rows[(rows["n_perturbed"] >= 3) & (rows["half_width_percent"] > 0)]
-    conditions = []
-    for (direction, delay), group in usable.groupby(["direction", "delay_ms"], sort=True):
-        h = group["half_width_percent"].to_numpy(float)
-        x = 1.0 / np.sqrt(group["n_perturbed"].to_numpy(float))
-        c = float(np.sum(h * x) / np.sum(x**2))  # least squares h = c / sqrt(n)
-        conditions.append({"direction": direction, "delay_ms": float(delay), "c_percent": c})
-    if not conditions:
-        raise ParameterError("design: the pilot sessions are too small; give larger --pilot counts")
     grid = np.arange(2, 20001)
     share = np.maximum(binom.ppf(0.1, grid, 0.5), 1.0)  # a condition's trials, 9 sessions in 10
-    for cond in conditions:
-        cond["trials_needed"] = int(grid[np.argmax(cond["c_percent"] / np.sqrt(share) <= target)])
-    widest = max(cond["c_percent"] for cond in conditions)
+    conditions, curves = [], []
+    for (direction, delay), group in usable.groupby(["direction", "delay_ms"], sort=True):
+        h = group["half_width_percent"].to_numpy(float)
+        x = 1.0 / group["n_perturbed"].to_numpy(float)
+        # the interval is hypot(random, systematic): h² = c² / m + floor², non-negative parts
+        (c2, floor2), _ = nnls(np.column_stack([x, np.ones_like(x)]), h**2)
+        predicted = np.sqrt(c2 / share + floor2)
+        if not predicted[-1] <= target:
+            raise ParameterError(
+                f"design: ±{target:g} % is out of reach at {direction}/{delay:g}: the part of "
+                "its interval that more trials do not shrink (timing, the coupler's twist, the "
+                f"window) is ±{math.sqrt(floor2):.2f} %; ask for a wider --interval"
+            )
+        conditions.append(
+            {"direction": direction, "delay_ms": float(delay), "c_percent": math.sqrt(c2),
+             "floor_percent": math.sqrt(floor2),
+             "trials_needed": int(grid[np.argmax(predicted <= target)])}
+        )  # fmt: skip
+        curves.append(predicted)
+    if not conditions:
+        raise ParameterError("design: the pilot sessions are too small; give larger --pilot counts")
     for_interval = max(cond["trials_needed"] for cond in conditions)
-    half = widest / np.sqrt(share)
+    half = np.max(curves, axis=0)  # the widest condition's
     shift = change / (math.sqrt(2) * half / 1.96)
     power_curve = norm.cdf(shift - 1.96) + norm.cdf(-shift - 1.96)
+    if not power_curve[-1] >= power:
+        raise ParameterError(
+            f"design: a power of {power:g} to detect a {change:g} % change is out of reach: the "
+            f"widest interval does not shrink below ±{half[-1]:.2f} % (its floor); ask for a "
+            "larger --change or a smaller --power"
+        )
     for_power = int(grid[np.argmax(power_curve >= power)])
     recommended = max(for_interval, for_power)
     shown = grid <= max(2 * recommended, int(n.max()) + 1)
