@@ -418,3 +418,22 @@ def test_the_design_fits_the_intervals_floor_and_names_a_target_below_it():
     assert binom.ppf(0.1, n, 0.5) >= 20 > binom.ppf(0.1, n - 1, 0.5)
     with pytest.raises(ParameterError, match=r"±1\.5 % is out of reach at dorsi/100: .*±2\.00 %"):
         _answer(rows, None, target=1.5, change=10.0, power=0.8)
+
+
+def test_a_grid_point_whose_every_session_failed_stays_in_the_summary():
+    from anklelab.studies.tables import summary_table
+
+    ok = {"status": "ok", "direction": "dorsi", "delay_ms": 100.0,
+          "quantity": "stiffness_nm_per_rad", "truth": 1000.0, "estimate": 1010.0,
+          "error": 10.0, "error_percent": 1.0, "half_width_percent": 3.0, "covered": True,
+          "interval_kind": "ci95", "poorly_determined": False}  # fmt: skip
+    failed = {"status": "failed", "failure": "SafetyLimitError: the drive tripped"}
+    results = pd.DataFrame(
+        [ok | {"twin.amplitude": 0.035, "seed": s} for s in (0, 1)]
+        + [failed | {"twin.amplitude": 0.3, "seed": s} for s in (0, 1)]
+    )
+    summary = summary_table(results, ["twin.amplitude"])
+    lost = summary[summary["twin.amplitude"] == 0.3]
+    assert len(lost) == 1 and lost["n_sessions"].iloc[0] == 0 and lost["n_failed"].iloc[0] == 2
+    kept = summary[summary["twin.amplitude"] == 0.035]
+    assert kept["n_sessions"].tolist() == [2] and kept["n_failed"].tolist() == [0]

@@ -119,9 +119,10 @@ def _print_summary(summary: pd.DataFrame, varied: list[str], results: pd.DataFra
     from rich.table import Table
 
     rows = summary[summary["quantity"] == "stiffness_nm_per_rad"]
-    if rows.empty:
+    lost = summary[summary["n_sessions"] == 0]  # points whose every session failed
+    if rows.empty and lost.empty:
         return
-    kinds = "/".join(sorted(set(rows["interval_kind"])))
+    kinds = "/".join(sorted({k for kind in rows["interval_kind"] for k in kind.split("/") if k}))
     table = Table(
         box=box.SIMPLE_HEAD,
         title="stiffness error over seeds, % of truth",
@@ -141,6 +142,11 @@ def _print_summary(summary: pd.DataFrame, varied: list[str], results: pd.DataFra
             *(f"{row[c]:.2f}" for c in ("sd_percent", "rmse_percent", "abs_error_percent_max")),
             f"{row['coverage']:.2f}",
         )
+    for _, row in lost.iterrows():
+        table.add_row(
+            *(f"{row[k]:g}" if isinstance(row[k], float) else str(row[k]) for k in varied),
+            f"all {row['n_failed']} failed", "0", *([""] * 5),
+        )  # fmt: skip
     Console().print(table)
 
 

@@ -58,15 +58,17 @@ def results_table(
 
 
 def summary_table(results: pd.DataFrame, varied: Sequence[str]) -> pd.DataFrame:
-    """Bias, sd, RMSE, error percentiles, half-width and coverage per point and timing point."""
+    """Bias, sd, RMSE, error percentiles, half-width and coverage per point and timing point; a
+    point whose every session failed is one row with ``n_sessions = 0`` and its ``n_failed``."""
     import pandas as pd
 
     keys = [*varied, "direction", "delay_ms", "quantity"]
     point = list(varied)
     ok = results[results["status"] == "ok"]
-    if ok.empty:
+    failed = results[results["status"] == "failed"]
+    if ok.empty and failed.empty:
         return pd.DataFrame(columns=[*keys, "n_sessions", "n_failed"])
-    failures = _point_labels(results[results["status"] == "failed"], point).value_counts()
+    failures = _point_labels(failed, point).value_counts()
     out = []
     grouped = ok.assign(_point=_point_labels(ok, point)).groupby(
         ["_point", "direction", "delay_ms", "quantity"], sort=False
@@ -86,7 +88,7 @@ def summary_table(results: pd.DataFrame, varied: Sequence[str]) -> pd.DataFrame:
                 "quantity": quantity,
                 "n_sessions": len(group),
                 "n_failed": n_failed,
-                "interval_kind": "/".join(sorted(set(group["interval_kind"]))),
+                "interval_kind": "/".join(sorted(set(group["interval_kind"]) - {""})),
                 "truth_mean": _mean(truth),
                 "estimate_mean": _mean(group["estimate"].to_numpy(float)),
                 "bias": _mean(error),
@@ -105,7 +107,14 @@ def summary_table(results: pd.DataFrame, varied: Sequence[str]) -> pd.DataFrame:
                 "poorly_determined_fraction": _share(group["poorly_determined"]),
             }
         )
-    return pd.DataFrame(out)
+    # a point whose every session failed is a row of its own, not a gap
+    lost = failed.assign(_point=_point_labels(failed, point)).drop_duplicates("_point")
+    for _, first in lost[~lost["_point"].isin(_point_labels(ok, point))].iterrows():
+        out.append(
+            {k: first[k] for k in point}
+            | {"n_sessions": 0, "n_failed": int(failures[first["_point"]])}
+        )
+    return pd.DataFrame(out, columns=None if out else [*keys, "n_sessions", "n_failed"])
 
 
 def cells_table(
