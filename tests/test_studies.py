@@ -437,3 +437,16 @@ def test_a_grid_point_whose_every_session_failed_stays_in_the_summary():
     assert len(lost) == 1 and lost["n_sessions"].iloc[0] == 0 and lost["n_failed"].iloc[0] == 2
     kept = summary[summary["twin.amplitude"] == 0.035]
     assert kept["n_sessions"].tolist() == [2] and kept["n_failed"].tolist() == [0]
+
+
+def test_a_session_given_twice_however_spelled_is_refused(tmp_path, monkeypatch):
+    from anklelab.studies.batch import session_names
+
+    (tmp_path / "sess").mkdir()
+    (tmp_path / "sess" / "p2.h5").write_bytes(b"")
+    monkeypatch.chdir(tmp_path)
+    with pytest.raises(ParameterError, match=r"SESSIONS: sess/\.\./sess/p2\.h5 is sess/p2\.h5"):
+        session_names([Path("sess/p2.h5"), Path("sess/../sess/p2.h5")])
+    with pytest.raises(ParameterError, match="given again"):
+        session_names([Path("sess/p2.h5"), tmp_path / "sess" / "p2.h5"])
+    assert session_names([Path("./sess/p2.h5"), Path("other/p2.h5")]) == ["sess-p2", "other-p2"]

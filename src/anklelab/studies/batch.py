@@ -24,6 +24,7 @@ from __future__ import annotations
 
 import hashlib
 import json
+import os
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
@@ -99,8 +100,16 @@ def session_names(paths: Sequence[Path]) -> list[str]:
     --------
     >>> session_names([Path("S01/day1.h5"), Path("S02/day1.h5"), Path("S03/x")])
     ['S01-day1', 'S02-day1', 'x']
+
+    A session given twice, however its path is spelled, is refused.
     """
-    parts = [Path(p).with_suffix("").parts if Path(p).suffix else Path(p).parts for p in paths]
+    real = [os.path.realpath(p) for p in paths]
+    for i, target in enumerate(real):
+        if target in real[:i]:
+            first = paths[real.index(target)]
+            raise ParameterError(f"SESSIONS: {paths[i]} is {first} given again")
+    plain = [Path(os.path.normpath(p)) for p in paths]  # no '.' or 'a/..' in the names
+    parts = [p.with_suffix("").parts if p.suffix else p.parts for p in plain]
     depth = [1] * len(parts)
     while True:
         names = ["-".join(p[-d:]) for p, d in zip(parts, depth, strict=True)]
