@@ -91,6 +91,11 @@ def test_a_sample_is_drawn_from_its_own_seed():
             {"twin": TINY["twin"] | {"unperturbed_per_point": 4.0}},
             "n_unperturbed and unperturbed_per_point: give one of them",
         ),
+        # a mistake in the fixed settings is theirs, not the grid point's
+        (
+            {"analysis": {"bootstrap_reps": 10, "colour": 1}},
+            r"study\.toml: fixed settings: \[analysis\] 'colour': unknown parameter",
+        ),
         (
             {"grid": {"twin.trials_per_point": [4, 100000]}, "twin": {"n_unperturbed": 6}},
             "trials_per_point = 100000: .*less than or equal to 1000",

@@ -389,17 +389,32 @@ def _validate_cells(study: Study, origin: str) -> None:
         if study.base is None
         else PerturberatorParameters.model_validate(study.base)
     )
-    for cell in study.cells()[:: len(study.seeds)]:
-        where = f"{origin}: " + (
-            ", ".join(f"{k} = {v!r}" for k, v in cell.variables.items()) or "fixed settings"
+
+    def check(settings: dict[str, dict[str, Any]], where: str) -> None:
+        checks = (
+            ("twin", TwinSettings().replace),
+            ("params", base.replace),
+            ("analysis", WalkingSettings().replace),
         )
-        try:
-            TwinSettings().replace(cell.twin)
-            base.replace(cell.params)
-            WalkingSettings().replace(cell.analysis)
-        except ParameterError as exc:
-            reason = " ".join(str(exc).replace("replace(): invalid parameters:", "").split())
-            raise ParameterError(f"{where}: {reason}") from None
+        for prefix, replace in checks:
+            try:
+                replace(settings[prefix])
+            except ParameterError as exc:
+                reason = " ".join(str(exc).replace("replace(): invalid parameters:", "").split())
+                raise ParameterError(f"{origin}: {where}: [{prefix}] {reason}") from None
+
+    # the fixed settings alone first: a mistake there is not the grid's
+    fixed: dict[str, dict[str, Any]] = {prefix: {} for prefix in PREFIXES}
+    for dotted, value in study.fixed.items():
+        prefix, key = dotted.split(".", 1)
+        fixed[prefix][key] = value
+    check(fixed, "fixed settings")
+    for cell in study.cells()[:: len(study.seeds)]:
+        point = ", ".join(f"{k} = {v!r}" for k, v in cell.variables.items())
+        check(
+            {"twin": cell.twin, "params": cell.params, "analysis": cell.analysis},
+            point or "fixed settings",
+        )
 
 
 def _jsonable(value: Any) -> Any:
