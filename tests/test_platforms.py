@@ -168,3 +168,12 @@ def test_hints_point_at_a_valid_name_never_the_users_own(tmp_path):
         ParameterError, match=r"lowpass_hz: unknown key \(did you mean 'cutoff_hz'\?\)"
     ):
         load_walking_settings(settings)
+
+
+def test_a_timing_point_whose_perturbation_ends_after_toe_off_is_refused():
+    """The twin's trial ends with stance: a perturbation or window past toe-off used to stop a
+    simulation with an IndexError deep in the kernel's set-up."""
+    base = load_platform("perturberator")
+    with pytest.raises(ParameterError, match=r"walking\.timing_points_ms: the last \(700 ms "):
+        base.replace({"walking.timing_points_ms": (100.0, 700.0)})
+    assert base.replace({"walking.timing_points_ms": (100.0, 600.0)}).walking.timing_points_ms

@@ -96,6 +96,20 @@ def test_a_sample_is_drawn_from_its_own_seed():
             {"analysis": {"bootstrap_reps": 10, "colour": 1}},
             r"study\.toml: fixed settings: \[analysis\] 'colour': unknown parameter",
         ),
+        # what would fail only once a session is simulated is found before any is
+        (
+            {"analysis": {"bootstrap_reps": 10, "cutoff_hz": 5000.0}},
+            r"\[analysis\] cutoff_hz = 5000: expected below the twin's Nyquist frequency, 500 Hz",
+        ),
+        (
+            {"grid": {"analysis.window_ms": [100.0, 900.0]}},
+            r"window_ms = 900\.0: \[analysis\] window_ms: the 900 ms window of the last timing "
+            r"point \(475 ms\) ends after toe-off",
+        ),
+        (
+            {"grid": {"params.walking.timing_points_ms": [[100.0, 2000.0]]}},
+            r"\[params\] walking\.timing_points_ms: the last \(2000 ms after heel contact\)",
+        ),
         (
             {"grid": {"twin.trials_per_point": [4, 100000]}, "twin": {"n_unperturbed": 6}},
             "trials_per_point = 100000: .*less than or equal to 1000",

@@ -307,3 +307,19 @@ class PerturberatorParameters(Parameters):
     gait: GaitParameters
     prosthetic: ProstheticFootParameters
     human: HumanAnkleParameters
+
+    @model_validator(mode="after")
+    def _within_stance(self) -> PerturberatorParameters:
+        """The last timing point's perturbation and analysis window end before toe-off."""
+        walk = self.walking
+        last = max(walk.timing_points_ms) / 1000.0
+        move = walk.ramp_s + walk.hold_s + walk.return_s
+        end = last + max(move, walk.window_ms / 1000.0)
+        if end > self.gait.stance_s:
+            raise ValueError(
+                f"walking.timing_points_ms: the last ({1000 * last:g} ms after heel contact) "
+                f"with its perturbation ({1000 * move:g} ms) or the analysis window "
+                f"({walk.window_ms:g} ms) ends {1000 * end:g} ms after heel contact, after "
+                f"toe-off (gait.stance_s = {self.gait.stance_s:g} s)"
+            )
+        return self

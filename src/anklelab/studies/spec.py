@@ -396,12 +396,15 @@ def _validate_cells(study: Study, origin: str) -> None:
             ("params", base.replace),
             ("analysis", WalkingSettings().replace),
         )
+        built = {}
         for prefix, replace in checks:
             try:
-                replace(settings[prefix])
+                built[prefix] = replace(settings[prefix])
             except ParameterError as exc:
                 reason = " ".join(str(exc).replace("replace(): invalid parameters:", "").split())
                 raise ParameterError(f"{origin}: {where}: [{prefix}] {reason}") from None
+        if problem := _analysis_misfit(built["params"], built["analysis"]):
+            raise ParameterError(f"{origin}: {where}: [analysis] {problem}")
 
     # the fixed settings alone first: a mistake there is not the grid's
     fixed: dict[str, dict[str, Any]] = {prefix: {} for prefix in PREFIXES}
@@ -415,6 +418,25 @@ def _validate_cells(study: Study, origin: str) -> None:
             {"twin": cell.twin, "params": cell.params, "analysis": cell.analysis},
             point or "fixed settings",
         )
+
+
+def _analysis_misfit(params: Any, analysis: Any) -> str:
+    """What keeps ``analysis`` (WalkingSettings) from analysing the twin's sessions of
+    ``params``, found before a session is simulated (empty when nothing does)."""
+    nyquist = params.daq.sample_rate_hz / 2
+    if analysis.cutoff_hz >= nyquist:
+        return (
+            f"cutoff_hz = {analysis.cutoff_hz:g}: expected below the twin's Nyquist frequency, "
+            f"{nyquist:g} Hz"
+        )
+    last = max(params.walking.timing_points_ms)
+    window = max(analysis.windows_ms())
+    if last + window > 1000.0 * params.gait.stance_s:
+        return (
+            f"window_ms: the {window:g} ms window of the last timing point ({last:g} ms) ends "
+            f"after toe-off (gait.stance_s = {params.gait.stance_s:g} s)"
+        )
+    return ""
 
 
 def _jsonable(value: Any) -> Any:
