@@ -205,8 +205,8 @@ def pooled_table(group: pd.DataFrame) -> pd.DataFrame:
     interval by :attr:`~anklelab.pipelines.walking.results.Estimate.poorly_determined`, or any
     session's estimate)."""
     import pandas as pd
-    from scipy import stats
 
+    from anklelab._student_t import t_quantile
     from anklelab.pipelines.walking.results import Estimate
 
     ok = group[group["status"] == "ok"] if "status" in group else group
@@ -223,7 +223,7 @@ def pooled_table(group: pd.DataFrame) -> pd.DataFrame:
         means = part["mean"].to_numpy(float)
         n = len(means)
         sd = float(np.std(means, ddof=1)) if n > 1 else np.nan
-        half = float(stats.t.ppf(0.975, n - 1) * sd / np.sqrt(n)) if n > 1 else np.nan
+        half = float(t_quantile(n - 1, 0.975) * sd / np.sqrt(n)) if n > 1 else np.nan
         mean = float(np.mean(means))
         pooled = Estimate(mean, sd, (mean - half, mean + half))
         out.append(

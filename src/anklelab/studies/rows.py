@@ -86,7 +86,8 @@ def timing_point_rows(
             if estimate is None:
                 value, sd, low, high, kind, vague = tp.cop_m, math.nan, math.nan, math.nan, "", None
             elif tp.n_perturbed < 2:  # one trial: no spread, no interval, nothing determined
-                value, sd, low, high, kind, vague = estimate.mean, math.nan, *_NO_INTERVAL, True
+                value, kind, vague = estimate.mean, "", True
+                sd = low = high = math.nan
             else:
                 value, sd = estimate.mean, estimate.sd
                 low, high, kind = interval(value, sd, estimate.ci95)
@@ -116,9 +117,6 @@ def timing_point_rows(
                 }
             )
     return rows
-
-
-_NO_INTERVAL = (math.nan, math.nan, "")
 
 
 def _number(value: Any) -> float:

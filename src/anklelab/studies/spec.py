@@ -193,11 +193,7 @@ class Study:
         """Every (point, seed), seeds innermost."""
         out: list[Cell] = []
         for point in self.points():
-            settings = self.fixed | point
-            split: dict[str, dict[str, Any]] = {prefix: {} for prefix in PREFIXES}
-            for dotted, value in settings.items():
-                prefix, key = dotted.split(".", 1)
-                split[prefix][key] = value
+            split = _by_prefix(self.fixed | point)
             for seed in self.seeds:
                 out.append(
                     Cell(len(out), seed, split["twin"], split["params"], split["analysis"],
@@ -406,18 +402,23 @@ def _validate_cells(study: Study, origin: str) -> None:
         if problem := _analysis_misfit(built["params"], built["analysis"]):
             raise ParameterError(f"{origin}: {where}: [analysis] {problem}")
 
-    # the fixed settings alone first: a mistake there is not the grid's
-    fixed: dict[str, dict[str, Any]] = {prefix: {} for prefix in PREFIXES}
-    for dotted, value in study.fixed.items():
-        prefix, key = dotted.split(".", 1)
-        fixed[prefix][key] = value
-    check(fixed, "fixed settings")
+    check(_by_prefix(study.fixed), "fixed settings")  # alone first: its mistakes are not the grid's
     for cell in study.cells()[:: len(study.seeds)]:
         point = ", ".join(f"{k} = {v!r}" for k, v in cell.variables.items())
         check(
             {"twin": cell.twin, "params": cell.params, "analysis": cell.analysis},
             point or "fixed settings",
         )
+
+
+def _by_prefix(settings: dict[str, Any]) -> dict[str, dict[str, Any]]:
+    """Settings by full dotted key (``"twin.trials_per_point"``) as one table per prefix of
+    :data:`PREFIXES`, keyed without it."""
+    split: dict[str, dict[str, Any]] = {prefix: {} for prefix in PREFIXES}
+    for dotted, value in settings.items():
+        prefix, key = dotted.split(".", 1)
+        split[prefix][key] = value
+    return split
 
 
 def _analysis_misfit(params: Any, analysis: Any) -> str:
