@@ -363,6 +363,23 @@ def test_the_twist_correction_delayed_by_the_coupler_lag_takes_the_damping_bias_
     assert damping_error(coupler_lag_ms=0.0) > 0.4
 
 
+def test_the_contact_cop_is_read_without_the_heavy_plates_own_moment_at_heel_strike():
+    """A 25 kg top plate on a compliant coupler: the heel's strike twists it, and its own
+    moment, while the load is a few tens of newtons, moved the COP at contact about 28 mm
+    forward (so every lever arm read that much short); without the strike's own forces it is
+    about 6 mm (the rest is the early COP path's shape, see the walking-analysis guide)."""
+    from anklelab.pipelines import WalkingSettings, analyze_walking
+
+    config = draw_config("stiff_prosthetic", 101, trials_per_point=10, n_calibration=2)
+    session = generate(dataclasses.replace(config, noise=NoiseConfig(scale=0.0)), 101)
+    results = analyze_walking(session, WalkingSettings(bootstrap_reps=5))
+    reference = session.truth["reference"]
+    errors = [
+        p.cop_m - reference[p.direction][f"{p.delay_ms:g}"]["cop_m"] for p in results.timing_points
+    ]
+    assert abs(np.mean(errors)) < 0.012, errors
+
+
 def test_the_change_within_the_window_is_read_from_the_neighbouring_points():
     """A human-like ankle whose stiffness rises 50 % in any 150 ms (+26 to +31 % over each
     window): the neighbouring timing points' stiffnesses give each window's change closer to

@@ -4,8 +4,9 @@ Each walking file is zeroed over its unloaded start; heel contact is detected fr
 force; the platform's own force transients (predicted by the platform filters from the motor
 angle, and for the coupler's twist under the foot's torque by their memoryless gains) are
 subtracted from the low-passed sagittal load; the COP, the lever arm ``dx`` and the ankle torque
-are computed with the COP zeroed at heel contact; the ankle angle's derivatives come from a
-local quadratic fit; and the perturbation onset is detected from the motor angle.
+are computed with the COP zeroed at heel contact (where it is read from the unfiltered load, less
+the own forces of the coupler's twist under the heel's strike); the ankle angle's derivatives
+come from a local quadratic fit; and the perturbation onset is detected from the motor angle.
 """
 
 from __future__ import annotations
@@ -15,12 +16,13 @@ import os
 import warnings
 from collections.abc import Sequence
 from concurrent.futures import ThreadPoolExecutor
+from functools import partial
 from typing import NamedTuple
 
 import numpy as np
 from numpy.typing import NDArray
 
-from anklelab.data.session import Session, WalkingTrial
+from anklelab.data.session import Session, SessionInfo, WalkingTrial
 from anklelab.errors import SessionFormatError
 from anklelab.forceplate import (
     SagittalLoad,
@@ -331,15 +333,7 @@ def _stance_block(
     rows = np.arange(len(walking))
 
     lp = {"fs": fs, "cutoff_hz": settings.cutoff_hz, "order": settings.filter_order}
-    cop0 = _cop_at_contact(
-        load_raw[:, 1],
-        load_raw[:, 2],
-        event,
-        settings.heel_contact_threshold_n,
-        fs,
-        settings.contact_cop_ms,
-        settings.contact_cop_degree,
-    )
+    cop0 = _contact_cop(load_raw, event, settings, filters, sagittal, info)
     cop_defined = np.isfinite(cop0)
     load_lp = lowpass(load_raw, **lp)
 
@@ -374,8 +368,6 @@ def _stance_block(
     onsets = perturbation_onset(
         motor, start=event, min_amplitude_rad=settings.onset_min_amplitude_rad
     )
-    grf_x_raw, grf_z_raw, moment_raw = np.moveaxis(load_raw, 1, 0)
-    lever = np.where(cop_defined, cop0, 0.0)[:, None] + info.heel_to_ankle_m
     channels_by_name = {
         "angle": kin[:, 0],
         "velocity": kin[:, 1],
@@ -384,8 +376,8 @@ def _stance_block(
         "dx": dx,
         "grf_z": grf_z,
         "motor_angle": motor,
-        "torque_raw": moment_raw - lever * grf_z_raw + grf_x_raw * info.ankle_height_m,
-        "grf_z_raw": grf_z_raw,
+        "torque_raw": _raw_torque(load_raw, cop0, info),
+        "grf_z_raw": load_raw[:, 1],
         "angle_raw": ankle_raw - ankle_at_contact,
         "time_angle": time_angle,
         "torque_untwisted": untwisted,
@@ -395,6 +387,56 @@ def _stance_block(
     for i, name in enumerate(STANCE_CHANNELS):  # only the stance of each channel is copied
         stance[:, i] = channels_by_name[name][rows[:, None], window]
     return _StanceBlock(stance, contact, event, cop0, onsets.index, onsets.amplitude)
+
+
+def _raw_torque(
+    load: NDArray[np.float64], cop0: NDArray[np.float64], info: SessionInfo
+) -> NDArray[np.float64]:
+    """The unfiltered ankle torque (N·m) of the sagittal ``load`` (grf_x, grf_z, moment; trials
+    first) for each trial's COP at contact ``cop0`` (m; 0 where it is undefined)."""
+    lever = np.where(np.isfinite(cop0), cop0, 0.0)[:, None] + info.heel_to_ankle_m
+    return load[:, 2] - lever * load[:, 1] + load[:, 0] * info.ankle_height_m
+
+
+def _contact_cop(
+    load: NDArray[np.float64],
+    event: NDArray[np.int64],
+    settings: WalkingSettings,
+    filters: PlatformFilters,
+    sagittal: NDArray[np.float64],
+    info: SessionInfo,
+) -> NDArray[np.float64]:
+    """Each trial's COP at heel contact (sample ``event``) from the unfiltered sagittal ``load``.
+
+    The heel's strike twists the coupler faster than anything else in the stance, while the
+    load is still small. With a ``transmission_stiffness_nm_per_rad``, the plate's own forces
+    of that twist (the filters' memoryless gains, on the unfiltered ankle torque low-passed at
+    ``contact_twist_cutoff_hz`` only) are taken off the load before the COP is read again.
+    Only the samples near contact are needed, with 50 ms either side for the low-pass and the
+    derivatives to settle.
+    """
+    fs = info.sample_rate_hz
+    read = partial(
+        _cop_at_contact,
+        threshold_n=settings.heel_contact_threshold_n,
+        fs=fs,
+        span_ms=settings.contact_cop_ms,
+        degree=settings.contact_cop_degree,
+    )
+    cop0 = read(load[:, 1], load[:, 2], event)
+    stiffness = settings.transmission_stiffness_nm_per_rad
+    if not stiffness:
+        return cop0
+    pad = samples(50.0, fs)
+    span = np.arange(-pad, samples(settings.contact_cop_ms, fs) + pad)
+    index = np.clip(event[:, None] + span, 0, load.shape[-1] - 1)
+    near = np.take_along_axis(load, index[:, None], axis=-1)
+    torque = lowpass(
+        np.nan_to_num(_raw_torque(near, cop0, info)), fs, settings.contact_twist_cutoff_hz, order=2
+    )
+    twist = advance(torque / stiffness, -settings.coupler_lag_ms * fs / 1000.0)
+    near = near - filters.predict_departure(-twist, combine=sagittal)
+    return read(near[:, 1], near[:, 2], np.full_like(event, pad))
 
 
 def _cop_at_contact(
