@@ -54,7 +54,7 @@ def simulate_cell(cell: Cell, *, threads: int | None = 1) -> Session:
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", AnklelabWarning)
         if twin.randomised == "none":
-            params = base.replace(_noise(base, twin.noise_scale) | cell.params)
+            params = base.replace(_noise(base, twin.noise_scale) | _truth_window(cell))
             per_point = twin.trials_per_point or params.walking.trials_per_point
             return simulate_perturberator(
                 params, seed=cell.seed, foot=twin.foot, trials_per_point=per_point,
@@ -71,7 +71,7 @@ def simulate_cell(cell: Cell, *, threads: int | None = 1) -> Session:
         )
         unperturbed = _unperturbed(twin, draw.trials_per_point) or draw.n_unperturbed
         session = simulate_perturberator(
-            draw.params.replace(cell.params), seed=rng, foot=draw.foot,
+            draw.params.replace(_truth_window(cell)), seed=rng, foot=draw.foot,
             trials_per_point=draw.trials_per_point, n_unperturbed=unperturbed, **options,
         )  # fmt: skip
         truth = dict(session.truth or {}) | {"draw": draw.describe()}
@@ -112,6 +112,17 @@ def run_cell(cell: Cell, *, threads: int | None = 1) -> dict[str, Any]:
         "simulate_s": simulated - start,
         "analyze_s": time.perf_counter() - simulated,
     }
+
+
+def _truth_window(cell: Cell) -> dict[str, Any]:
+    """The cell's parameter overrides, with the twin's truth taken over the analysis's window:
+    ``walking.window_ms`` follows ``analysis.window_ms`` unless the cell sets it (the window
+    changes only the truth, not what is simulated; a stiffness that changes within the window
+    has a different θ²-weighted average over 75 or 125 ms than over 100)."""
+    window = cell.analysis.get("window_ms")
+    if window is None or "walking.window_ms" in cell.params:
+        return cell.params
+    return cell.params | {"walking.window_ms": window}
 
 
 def _unperturbed(twin: TwinSettings, per_point: int) -> int | None:
