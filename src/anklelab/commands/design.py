@@ -33,25 +33,21 @@ def design(
     interval: Annotated[
         float,
         typer.Option(
-            help="Target stiffness interval half-width, % (±X %).",
-            min=0,
+            help="Target stiffness interval half-width, % (±X %; above 0).",
             callback=finite,
         ),
     ] = 3.0,
     change: Annotated[
         float,
         typer.Option(
-            help="Stiffness change between timing points to detect, %.",
-            min=0,
+            help="Stiffness change between timing points to detect, % (above 0).",
             callback=finite,
         ),
     ] = 10.0,
     power: Annotated[
         float,
         typer.Option(
-            help="Power to detect that change (between 0 and 1).",
-            min=0,
-            max=1,
+            help="Power to detect that change (strictly between 0 and 1).",
             callback=finite,
         ),
     ] = 0.8,
