@@ -34,6 +34,7 @@ def design(
         float,
         typer.Option(
             help="Target stiffness interval half-width, % (±X %; above 0).",
+            metavar="PERCENT",
             callback=finite,
         ),
     ] = 3.0,
@@ -41,6 +42,7 @@ def design(
         float,
         typer.Option(
             help="Stiffness change between timing points to detect, % (above 0).",
+            metavar="PERCENT",
             callback=finite,
         ),
     ] = 10.0,
@@ -48,6 +50,7 @@ def design(
         float,
         typer.Option(
             help="Power to detect that change (strictly between 0 and 1).",
+            metavar="FRACTION",
             callback=finite,
         ),
     ] = 0.8,
