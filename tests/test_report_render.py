@@ -224,3 +224,36 @@ def test_a_ctrl_c_taken_by_another_thread_is_held_back_too():
         done.set()
         other.join()
         signal.signal(signal.SIGINT, previous)
+
+
+def test_an_interruption_while_the_workers_start_ends_them_without_a_traceback(tmp_path):
+    """SIGTERM (here a KeyboardInterrupt raised just after the thread that starts the workers
+    has started) inside the constructor: the workers are ended before the command ends. Left
+    starting, one found its semaphores gone once the command had ended and printed a
+    ``FileNotFoundError`` traceback after the command's last line."""
+    import subprocess
+    import sys
+    import time
+
+    script = tmp_path / "start.py"
+    script.write_text(
+        "import threading\n"
+        "from anklelab.report.render import FigureRenderer\n"
+        "if __name__ == '__main__':\n"
+        "    original = threading.Thread.start\n"
+        "    def start(self):\n"
+        "        original(self)\n"
+        "        if getattr(getattr(self, '_target', None), '__name__', '') == '_start':\n"
+        "            raise KeyboardInterrupt\n"
+        "    threading.Thread.start = start\n"
+        "    try:\n"
+        "        FigureRenderer(processes=2)\n"
+        "    except KeyboardInterrupt:\n"
+        "        print('interrupted', flush=True)\n"
+    )
+    out, err = tmp_path / "out", tmp_path / "err"  # files: the workers inherit them
+    with out.open("w") as stdout, err.open("w") as stderr:
+        subprocess.run([sys.executable, str(script)], stdout=stdout, stderr=stderr, check=True)
+    time.sleep(2.0)  # a worker left starting prints its traceback within a second
+    assert out.read_text() == "interrupted\n"
+    assert "Traceback" not in err.read_text(), err.read_text()

@@ -192,6 +192,11 @@ class FigureRenderer:
                         self._start(self._pool)
             except (OSError, NotImplementedError, BrokenProcessPool):
                 self.close()
+            except BaseException:
+                # interrupted (SIGTERM) while they start: end them before this process ends, or a
+                # worker still starting would find its semaphores gone and print a traceback
+                self.close(abandon=True)
+                raise
 
     def _start(self, pool: ProcessPoolExecutor) -> None:
         """Start every worker now (the pool starts one per pending task)."""
