@@ -475,16 +475,31 @@ def test_the_truth_is_taken_over_the_window_the_cell_analyses():
     """A study of the analysis window compared every window's estimate with the twin's 100 ms
     truth: a stiffness that changes within the window has another θ²-weighted average over
     125 ms, so the 125 ms intervals seemed to miss (coverage 0.79)."""
+    from anklelab.platforms import load_platform
     from anklelab.studies.cell import simulate_cell
     from anklelab.studies.spec import Cell
 
     twin = {"trials_per_point": 2, "n_unperturbed": 4, "n_calibration": 1, "bench": False}
 
-    def windows(analysis, params=None):
-        cell = Cell(0, 3, twin, params or {}, analysis, {})
+    def windows(analysis, params=None, base=None):
+        cell = Cell(0, 3, twin, params or {}, analysis, {}, base)
         reference = simulate_cell(cell).truth["reference"]
         return {point["window_ms"] for points in reference.values() for point in points.values()}
 
     assert windows({"window_ms": 125.0}) == {125.0}
     assert windows({}) == {100.0}
     assert windows({"window_ms": 125.0}, {"walking.window_ms": 75.0}) == {75.0}
+    # a base parameter set's own window gives way to the analysis's (100 ms by default)
+    base = load_platform("perturberator").replace({"walking.window_ms": 75.0})
+    assert windows({}, base=base.model_dump()) == {100.0}
+
+
+def test_a_stored_session_of_other_code_is_not_reused(monkeypatch):
+    """A source tree keeps its version across edits: the cell's key also hashes the code, so a
+    resumed study never takes a session that other code computed for one of its own."""
+    import anklelab.studies.spec as spec
+
+    cell = study_from_mapping(TINY, origin="tiny").cells()[0]
+    key = cell.key
+    monkeypatch.setattr(spec, "code_fingerprint", lambda: "0" * 16)
+    assert cell.key != key

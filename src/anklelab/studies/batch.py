@@ -34,7 +34,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from anklelab._atomic import write_text_atomic
-from anklelab._version import __version__
+from anklelab._version import __version__, code_fingerprint
 from anklelab.errors import ParameterError
 from anklelab.studies.execute import ResultStore, Task, run_tasks
 from anklelab.studies.rows import timing_point_rows
@@ -243,10 +243,17 @@ def _frame(rows: list[dict[str, Any]]) -> pd.DataFrame:
 
 def _key(path: Path, settings: dict[str, Any]) -> str:
     """Names a session's result: its path, size and modification time, the settings and the
-    anklelab version."""
+    anklelab version and code."""
     stat = path.stat()
     text = json.dumps(
-        [str(path.resolve()), stat.st_size, stat.st_mtime_ns, settings, __version__],
+        [
+            str(path.resolve()),
+            stat.st_size,
+            stat.st_mtime_ns,
+            settings,
+            __version__,
+            code_fingerprint(),
+        ],
         sort_keys=True,
     )
     return hashlib.sha256(text.encode()).hexdigest()[:16]

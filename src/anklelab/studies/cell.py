@@ -116,12 +116,15 @@ def run_cell(cell: Cell, *, threads: int | None = 1) -> dict[str, Any]:
 
 def _truth_window(cell: Cell) -> dict[str, Any]:
     """The cell's parameter overrides, with the twin's truth taken over the analysis's window:
-    ``walking.window_ms`` follows ``analysis.window_ms`` unless the cell sets it (the window
-    changes only the truth, not what is simulated; a stiffness that changes within the window
-    has a different θ²-weighted average over 75 or 125 ms than over 100)."""
-    window = cell.analysis.get("window_ms")
-    if window is None or "walking.window_ms" in cell.params:
+    ``walking.window_ms`` (the shipped or the base parameter set's) is the analysis's
+    ``window_ms`` unless the cell sets it. The window changes only the truth, not what is
+    simulated; a stiffness that changes within the window has a different θ²-weighted average
+    over 75 or 125 ms than over 100."""
+    from anklelab.pipelines.walking import WalkingSettings
+
+    if "walking.window_ms" in cell.params:
         return cell.params
+    window = WalkingSettings().replace(cell.analysis).window_ms
     return cell.params | {"walking.window_ms": window}
 
 

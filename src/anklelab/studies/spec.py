@@ -51,7 +51,7 @@ from pydantic import Field, model_validator
 
 from anklelab._params import Parameters, did_you_mean, read_parameter_document
 from anklelab._session_limits import MAX_TRIALS_PER_POINT, MAX_UNPERTURBED
-from anklelab._version import __version__
+from anklelab._version import __version__, code_fingerprint
 from anklelab.errors import ParameterError
 
 __all__ = [
@@ -133,9 +133,10 @@ class Cell:
     @property
     def key(self) -> str:
         """A hash of what the cell computes (not of its position in the study), and of the
-        anklelab version computing it."""
+        anklelab version and code computing it."""
         content = {
             "anklelab_version": __version__,
+            "anklelab_code": code_fingerprint(),
             "seed": self.seed,
             "twin": self.twin,
             "params": self.params,

@@ -39,7 +39,9 @@ class WalkingSettings(Parameters):
         With a ``transmission_stiffness_nm_per_rad``, the COP at heel contact is read from the
         unfiltered load less the plate's own forces of the coupler's twist under the heel's
         strike, the twist taken from the unfiltered ankle torque low-passed at this frequency
-        (2nd order, zero phase), Hz. A heavy top plate's own moment while the load is still
+        (2nd order, zero phase; not filtered at or above the session's Nyquist frequency), Hz.
+        At least the 20 Hz of paper 000's low-pass, below which the twist correction of the
+        low-passed load already acts. A heavy top plate's own moment while the load is still
         small moved the contact COP by up to 4 cm on the independent generator. 60 Hz was
         chosen on 60 randomised-twin sessions: the lever arm's mean error was -1.68 mm without
         this correction, -0.76 mm with the twist unfiltered, -0.46, -0.41 and -0.43 mm at 30,
@@ -148,7 +150,7 @@ class WalkingSettings(Parameters):
     heel_contact_hold_ms: float = Field(5.0, ge=0)
     contact_cop_ms: float = Field(20.0, gt=0)
     contact_cop_degree: int = Field(1, ge=0, le=5)
-    contact_twist_cutoff_hz: float = Field(60.0, gt=0)
+    contact_twist_cutoff_hz: float = Field(60.0, ge=20)
     baseline_ms: float = Field(50.0, gt=0)
     onset_min_amplitude_rad: float = Field(0.005, gt=0)
     onset_tolerance_ms: float = Field(50.0, gt=0)

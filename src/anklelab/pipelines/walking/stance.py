@@ -406,14 +406,16 @@ def _contact_cop(
     sagittal: NDArray[np.float64],
     info: SessionInfo,
 ) -> NDArray[np.float64]:
-    """Each trial's COP at heel contact (sample ``event``) from the unfiltered sagittal ``load``.
+    """Each trial's COP at heel contact (sample ``event``) from the unfiltered sagittal ``load``,
+    m (NaN where it is undefined: the trial is then dropped).
 
     The heel's strike twists the coupler faster than anything else in the stance, while the
     load is still small. With a ``transmission_stiffness_nm_per_rad``, the plate's own forces
     of that twist (the filters' memoryless gains, on the unfiltered ankle torque low-passed at
-    ``contact_twist_cutoff_hz`` only) are taken off the load before the COP is read again.
-    Only the samples near contact are needed, with 50 ms either side for the low-pass and the
-    derivatives to settle.
+    ``contact_twist_cutoff_hz``; not filtered when that is at or above the Nyquist frequency)
+    are taken off the load before the COP is read again. Only the samples near contact are
+    needed, with 50 ms (or two periods of the cut-off, if longer) either side for the low-pass
+    and the derivatives to settle.
     """
     fs = info.sample_rate_hz
     read = partial(
@@ -427,16 +429,19 @@ def _contact_cop(
     stiffness = settings.transmission_stiffness_nm_per_rad
     if not stiffness:
         return cop0
-    pad = samples(50.0, fs)
+    cutoff = settings.contact_twist_cutoff_hz
+    pad = samples(max(50.0, 2000.0 / cutoff), fs)
     span = np.arange(-pad, samples(settings.contact_cop_ms, fs) + pad)
     index = np.clip(event[:, None] + span, 0, load.shape[-1] - 1)
     near = np.take_along_axis(load, index[:, None], axis=-1)
-    torque = lowpass(
-        np.nan_to_num(_raw_torque(near, cop0, info)), fs, settings.contact_twist_cutoff_hz, order=2
-    )
+    torque = np.nan_to_num(_raw_torque(near, cop0, info))
+    if cutoff < fs / 2:
+        torque = lowpass(torque, fs, cutoff, order=2)
     twist = advance(torque / stiffness, -settings.coupler_lag_ms * fs / 1000.0)
     near = near - filters.predict_departure(-twist, combine=sagittal)
-    return read(near[:, 1], near[:, 2], np.full_like(event, pad))
+    return np.where(
+        np.isfinite(cop0), read(near[:, 1], near[:, 2], np.full_like(event, pad)), np.nan
+    )
 
 
 def _cop_at_contact(
