@@ -382,6 +382,19 @@ def test_the_contact_cop_is_read_without_the_heavy_plates_own_moment_at_heel_str
     assert abs(np.mean(errors)) < 0.012, errors
 
 
+def test_a_session_sampled_below_twice_the_contact_twist_cutoff_is_analysed():
+    """At 100 Hz the 60 Hz low-pass of the strike's twist lies above the Nyquist frequency: the
+    twist is taken unfiltered (it stopped the analysis, naming cutoff_hz)."""
+    from anklelab.pipelines import WalkingSettings, analyze_walking
+
+    config = draw_config(
+        "nominal", 1, trials_per_point=4, n_calibration=2, sample_rate_hz=100.0, bench=False
+    )
+    results = analyze_walking(generate(config, 1), WalkingSettings(bootstrap_reps=5, cutoff_hz=10))
+    stiffness = [p.stiffness.mean for p in results.timing_points]
+    assert len(stiffness) == 8 and np.all(np.isfinite(stiffness))
+
+
 def test_the_change_within_the_window_is_read_from_the_neighbouring_points():
     """A human-like ankle whose stiffness rises 50 % in any 150 ms (+26 to +31 % over each
     window): the neighbouring timing points' stiffnesses give each window's change closer to
