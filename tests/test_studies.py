@@ -503,3 +503,28 @@ def test_a_stored_session_of_other_code_is_not_reused(monkeypatch):
     key = cell.key
     monkeypatch.setattr(spec, "code_fingerprint", lambda: "0" * 16)
     assert cell.key != key
+
+
+def test_ctrl_c_on_a_local_cluster_study_prints_one_line(tmp_path):
+    """A terminal's Ctrl-C reaches the whole process group: the local cluster's workers each
+    printed a KeyboardInterrupt traceback (and Dask's warnings) around the command's line."""
+    study_file = tmp_path / "tiny.toml"
+    study_file.write_text(TINY_TOML.replace("seeds = [0, 1]", "seeds = 8"), encoding="utf-8")
+    target = tmp_path / "stopped"
+    command = [sys.executable, "-c", "from anklelab.cli import run; run()", "study",
+               str(study_file), "--out", str(target), "--scheduler", "local-cluster",
+               "--workers", "2", "--no-figures"]  # fmt: skip
+    err = tmp_path / "err"  # a file: the workers inherit it
+    with err.open("w") as stderr:
+        proc = subprocess.Popen(
+            command, start_new_session=True, stdout=subprocess.DEVNULL, stderr=stderr
+        )
+        cells = checkpoint_for(target)
+        deadline = time.monotonic() + 240
+        while time.monotonic() < deadline and not list(cells.glob("*.json")):
+            time.sleep(0.1)
+        os.killpg(proc.pid, signal.SIGINT)
+        assert proc.wait(timeout=120) == 128 + signal.SIGINT
+    time.sleep(2.0)  # anything a worker still had to say
+    lines = err.read_text().strip().splitlines()
+    assert lines == ["error: interrupted by SIGINT; unfinished outputs were removed"], lines

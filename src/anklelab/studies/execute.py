@@ -263,6 +263,7 @@ def _client(scheduler: str, workers: int, client_type: Any, cluster_type: Any) -
         with cluster_type(
             n_workers=workers, threads_per_worker=1, processes=True, protocol="tcp",
             host="127.0.0.1", dashboard_address=None,
+            preload=["anklelab.studies._worker_setup"],
         ) as cluster, client_type(cluster) as client:  # fmt: skip
             yield client
         return

@@ -1,0 +1,14 @@
+"""Set-up of each worker process of a study's local Dask cluster (a Dask preload module)."""
+
+from __future__ import annotations
+
+import logging
+import signal
+from typing import Any
+
+
+def dask_setup(worker: Any) -> None:
+    """Ctrl-C is the command's, which ends the cluster: a worker ignores it, instead of printing
+    a ``KeyboardInterrupt`` traceback, and keeps quiet below errors, as the command does."""
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    logging.getLogger("distributed").setLevel(logging.ERROR)
