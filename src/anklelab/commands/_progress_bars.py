@@ -6,7 +6,14 @@ from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 
 from rich.console import Console
-from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
+from rich.progress import (
+    BarColumn,
+    MofNCompleteColumn,
+    Progress,
+    TextColumn,
+    TimeElapsedColumn,
+    TimeRemainingColumn,
+)
 
 __all__ = ["recording_progress"]
 
@@ -18,13 +25,16 @@ def recording_progress(
     """Yield ``task(description)``, which adds a bar and returns its ``progress(done, total)``.
 
     Bars go to stderr, so stdout carries only the command's output; they disappear when done
-    unless ``transient`` is false.
+    unless ``transient`` is false. Each shows the time elapsed and an estimate of the time left
+    (a long study's first question).
     """
     columns = (
         TextColumn("{task.description}"),
         BarColumn(),
         MofNCompleteColumn(),
         TimeElapsedColumn(),
+        TextColumn("left"),
+        TimeRemainingColumn(),
     )
     with Progress(*columns, console=Console(stderr=True), transient=transient) as bar:
 
