@@ -9,6 +9,12 @@ from typing import Any
 
 def dask_setup(worker: Any) -> None:
     """Ctrl-C is the command's, which ends the cluster: a worker ignores it, instead of printing
-    a ``KeyboardInterrupt`` traceback, and keeps quiet below errors, as the command does."""
+    a ``KeyboardInterrupt`` traceback, and keeps quiet below errors, as the command does.
+
+    Parameters
+    ----------
+    worker : distributed.Worker
+        The worker starting (Dask calls this in its process; nothing of it is used).
+    """
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     logging.getLogger("distributed").setLevel(logging.ERROR)
