@@ -226,11 +226,13 @@ def test_a_ctrl_c_taken_by_another_thread_is_held_back_too():
         signal.signal(signal.SIGINT, previous)
 
 
-def test_an_interruption_while_the_workers_start_ends_them_without_a_traceback(tmp_path):
-    """SIGTERM (here a KeyboardInterrupt raised just after the thread that starts the workers
-    has started) inside the constructor: the workers are ended before the command ends. Left
+@pytest.mark.parametrize("moment", ["before", "after"])
+def test_an_interruption_while_the_workers_start_ends_them_without_a_traceback(tmp_path, moment):
+    """SIGTERM (here a KeyboardInterrupt raised just before or after the thread that starts the
+    workers starts) inside the constructor: the workers are ended before the command ends. Left
     starting, one found its semaphores gone once the command had ended and printed a
-    ``FileNotFoundError`` traceback after the command's last line."""
+    ``FileNotFoundError`` traceback after the command's last line; and ending them must not
+    join a thread that never started."""
     import subprocess
     import sys
     import time
@@ -242,8 +244,11 @@ def test_an_interruption_while_the_workers_start_ends_them_without_a_traceback(t
         "if __name__ == '__main__':\n"
         "    original = threading.Thread.start\n"
         "    def start(self):\n"
+        "        starter = getattr(getattr(self, '_target', None), '__name__', '') == '_start'\n"
+        f"        if starter and {moment == 'before'}:\n"
+        "            raise KeyboardInterrupt\n"
         "        original(self)\n"
-        "        if getattr(getattr(self, '_target', None), '__name__', '') == '_start':\n"
+        "        if starter:\n"
         "            raise KeyboardInterrupt\n"
         "    threading.Thread.start = start\n"
         "    try:\n"

@@ -250,7 +250,7 @@ class FigureRenderer:
             # process ended would find its setup's semaphore gone and print a traceback after
             # the command's last line
             pool.shutdown(wait=False, cancel_futures=True)
-            if self._starter is not None:
+            if self._starter is not None and self._starter.ident is not None:  # started
                 self._starter.join(timeout=_STARTUP_S)
             # no public way before Python 3.14's terminate_workers()
             processes = list((getattr(pool, "_processes", None) or {}).values())
