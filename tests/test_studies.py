@@ -528,3 +528,15 @@ def test_ctrl_c_on_a_local_cluster_study_prints_one_line(tmp_path):
     time.sleep(2.0)  # anything a worker still had to say
     lines = err.read_text().strip().splitlines()
     assert lines == ["error: interrupted by SIGINT; unfinished outputs were removed"], lines
+
+
+def test_stored_results_none_of_which_is_reused_are_named(tmp_path):
+    """A resume after the code changed runs everything again: the command says why."""
+    from anklelab.errors import AnklelabWarning
+    from anklelab.studies.execute import ResultStore, Task, run_tasks
+
+    store = ResultStore(tmp_path / "cells")
+    store.write("computed-by-other-code", {"ok": True})
+    with pytest.warns(AnklelabWarning, match="none of its 1 stored results is for these"):
+        run = run_tasks([Task("k", dict, ())], store, workers=1)
+    assert run["ran"] == 1 and store.has("k")

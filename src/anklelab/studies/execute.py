@@ -179,6 +179,14 @@ def run_tasks(
         raise ParameterError(f"--workers: expected >= 1, got {workers}")
     todo = [task for task in tasks if not store.has(task.key)]
     done = len(tasks) - len(todo)
+    if not done and (stored := sum(1 for _ in store.directory.glob("*.json"))):
+        warnings.warn(
+            f"{store.directory}: none of its {stored} stored results is for these sessions "
+            f"(they have other settings, or were computed by another anklelab version or "
+            f"code): all {len(tasks)} run",
+            AnklelabWarning,
+            stacklevel=2,
+        )
     report = progress or (lambda _done, _total: None)
     report(done, len(tasks))
     start = time.perf_counter()
