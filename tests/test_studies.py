@@ -540,3 +540,19 @@ def test_stored_results_none_of_which_is_reused_are_named(tmp_path):
     with pytest.warns(AnklelabWarning, match="none of its 1 stored results is for these"):
         run = run_tasks([Task("k", dict, ())], store, workers=1)
     assert run["ran"] == 1 and store.has("k")
+
+
+def test_a_session_whose_worker_dies_is_recorded_with_a_hint(tmp_path):
+    """A worker killed while it runs a session (out of memory, say) fails the session with
+    Dask's KilledWorker, whose text sends the user to worker logs the study keeps quiet."""
+    import dask
+
+    from anklelab.studies.execute import ResultStore, Task, run_tasks
+
+    store = ResultStore(tmp_path / "cells")
+    with dask.config.set({"distributed.scheduler.allowed-failures": 0}):
+        run_tasks([Task("k", os._exit, (1,))], store, scheduler="local-cluster", workers=1,
+                  retries=0)  # fmt: skip
+    record = store.read("k")
+    assert not record["ok"]
+    assert record["error"].startswith("the worker running it died (out of memory?): KilledWorker")

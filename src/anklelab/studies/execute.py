@@ -259,7 +259,9 @@ def _run_distributed(
                 record = future.result()
             else:  # the worker died (every retry): the task's error, not the study's
                 exc = future.exception()
-                error = " ".join(f"{type(exc).__name__}: {exc}".split())
+                error = "the worker running it died (out of memory?): " + " ".join(
+                    f"{type(exc).__name__}: {exc}".split()
+                )
                 record = {"ok": False, "attempts": retries + 1, "error": error}
             finished(future.key, record)
             future.release()
