@@ -556,3 +556,15 @@ def test_a_session_whose_worker_dies_is_recorded_with_a_hint(tmp_path):
     record = store.read("k")
     assert not record["ok"]
     assert record["error"].startswith("the worker running it died (out of memory?): KilledWorker")
+
+
+def test_a_randomised_study_window_is_checked_against_the_shortest_stance_drawn():
+    """Each randomised session draws its stance (0.78-0.92 s); a window that fits the shipped
+    0.80 s but not a 0.78 s stance failed some cells after the check had passed."""
+    mapping = dict(TINY) | {"twin": TINY["twin"] | {"randomised": "prosthetic"}}
+    mapping.pop("grid")
+    mapping["analysis"] = {"bootstrap_reps": 10, "window_ms": 310.0, "sensitivity_windows_ms": []}
+    with pytest.raises(ParameterError, match=r"window_ms: the 310 ms window .* after toe-off"):
+        study_from_mapping(mapping, origin="w.toml")
+    mapping["params"] = {"gait.stance_s": 0.8}  # a stance the study sets is not drawn
+    study_from_mapping(mapping, origin="w.toml")

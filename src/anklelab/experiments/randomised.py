@@ -48,6 +48,8 @@ KINDS: tuple[Kind, ...] = ("prosthetic", "human", "random")
 _AXES = ("+x", "-x", "+y", "-y")
 _GROWTH_SPAN_S = 0.15  # the human stiffness grows by a drawn fraction over this span
 _KNOTS_S = np.arange(0.0, 0.85, 0.025)  # knots of the human stiffness law (exact to ~0.1 %)
+STANCE_RANGE_S = (0.78, 0.92)
+"""The range the subject's mean stance time is drawn from, s."""
 
 
 @dataclass(frozen=True)
@@ -237,7 +239,7 @@ def _subject(rng: np.random.Generator, p: PerturberatorParameters) -> dict[str, 
     }
     # the last window (475 ms + 100 ms, plus the onset latency) ends before heel-off even in a
     # stance 2 sd short: 0.78 s x 0.88 x (1 - 2 x 0.03) = 0.645 s
-    stance = float(rng.uniform(0.78, 0.92))
+    stance = float(rng.uniform(*STANCE_RANGE_S))
     longest = stance * (1 + 3 * variability["gait.stance_sd_fraction"])
     duration = g.pre_contact_s + g.pre_contact_jitter_s + longest + 0.05  # covers every stance
     return variability | {

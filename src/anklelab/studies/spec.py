@@ -393,14 +393,21 @@ def _validate_cells(study: Study, origin: str) -> None:
             ("params", base.replace),
             ("analysis", WalkingSettings().replace),
         )
-        built = {}
+        built: dict[str, Any] = {}
         for prefix, replace in checks:
             try:
                 built[prefix] = replace(settings[prefix])
             except ParameterError as exc:
                 reason = " ".join(str(exc).replace("replace(): invalid parameters:", "").split())
                 raise ParameterError(f"{origin}: {where}: [{prefix}] {reason}") from None
-        if problem := _analysis_misfit(built["params"], built["analysis"]):
+        params = built["params"]
+        if built["twin"].randomised != "none" and "gait.stance_s" not in settings["params"]:
+            from anklelab.experiments.randomised import STANCE_RANGE_S
+
+            # each session draws its stance: checked against the shortest it can draw
+            shortest = params.gait.model_copy(update={"stance_s": STANCE_RANGE_S[0]})
+            params = params.model_copy(update={"gait": shortest})
+        if problem := _analysis_misfit(params, built["analysis"]):
             raise ParameterError(f"{origin}: {where}: [analysis] {problem}")
 
     check(_by_prefix(study.fixed), "fixed settings")  # alone first: its mistakes are not the grid's
