@@ -45,3 +45,12 @@ def test_the_twin_takes_no_protocol():
         main(["--generator", "twin", "--sessions", "1", "--protocol", "ramp_s=0.05"])
     with pytest.raises(ValueError, match="only the cleanroom generator"):
         generate("twin", "random", 0, (("ramp_s", 0.05),))
+
+
+def test_an_analysis_window_other_than_the_truths_is_refused(tmp_path):
+    """Both generators' truth is a 100 ms average: a 125 ms analysis scored against it reads a
+    changing stiffness's difference between the windows as error."""
+    settings = tmp_path / "s.toml"
+    settings.write_text("window_ms = 125.0\n")
+    with pytest.raises(SystemExit, match="window_ms = 125; the generators' truth"):
+        main(["--generator", "cleanroom", "--sessions", "1", "--settings", str(settings)])

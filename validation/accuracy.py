@@ -332,6 +332,24 @@ def _distribution_lines(group: Sequence[dict[str, Any]]) -> list[str]:
     return out
 
 
+TRUTH_WINDOW_MS = 100.0
+"""The window both generators' truth (stiffness, damping, lever arm) is averaged over, ms."""
+
+
+def check_window(settings_file: str | None) -> None:
+    """Refuse analysis settings whose window is not the truth's: a stiffness that changes within
+    the window has another average over another window, and every error would be off by it."""
+    from anklelab.pipelines.walking import load_walking_settings
+
+    window = load_walking_settings(settings_file).window_ms
+    if window != TRUTH_WINDOW_MS:
+        raise SystemExit(
+            f"error: --settings {settings_file}: window_ms = {window:g}; the generators' truth "
+            f"is averaged over {TRUTH_WINDOW_MS:g} ms, so the errors would compare different "
+            "things (a study, which takes the twin's truth over the analysed window, can)"
+        )
+
+
 def main(argv: Sequence[str] | None = None) -> None:
     parser = argparse.ArgumentParser(prog="python -m validation.accuracy", description=__doc__)
     parser.add_argument("--generator", default="twin", choices=("twin", "cleanroom"))
@@ -354,6 +372,7 @@ def main(argv: Sequence[str] | None = None) -> None:
     protocol = parse_protocol(args.protocol)
     if protocol and args.generator != "cleanroom":
         raise SystemExit("error: --protocol: only the cleanroom generator takes it")
+    check_window(args.settings)
     rows = run(args.generator, args.kind, seeds, args.settings, args.cache, args.workers, protocol)
     if args.out:
         write_rows(args.out, rows)
