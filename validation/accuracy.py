@@ -4,11 +4,10 @@ Each session comes from a generator (``twin``: anklelab's randomised twin; ``cle
 independently written generator in :mod:`validation.cleanroom`) drawn with a seed; it is
 analysed with default (or given) settings, whose window must be the truth's 100 ms (a
 changing stiffness has another average over another window), and every timing point becomes
-one row: the truth,
-the estimate with its interval and flags, and the errors. The summary gives, per generator and
-kind, the distribution of the stiffness error (median, 95th percentile, max), the inertia and
-damping errors, the lever-arm bias, interval coverage, and the false-alarm and miss rates of the
-"stiffness changes within the window" diagnostic.
+one row: the truth, the estimate with its interval and flags, and the errors. The summary
+gives, per generator and kind, the distribution of the stiffness error (median, 95th
+percentile, max), the inertia and damping errors, the lever-arm bias, interval coverage, and the
+false-alarm and miss rates of the "stiffness changes within the window" diagnostic.
 
 Run::
 
