@@ -524,13 +524,15 @@ def _walking(
     n = round(gait.trial_duration_s * setup.fs)
     time = np.arange(n) / setup.fs
     heel_contact = heel_contact_times(trials, gait, walk.heel_contact_threshold_n)
+    # the foot's load first: the trigger's screening waits while the calibration's thread loads
+    # the platform kernel (numba compiles or loads one function at a time), this is NumPy
+    load, nominal = foot_load(foot, trials, stance_signals(trials, gait, time), heel_contact, time)
     onset, refused, refused_s = _onsets(setup, trials, delays, signs, rng, fault)
     notes = [
         _refusal_note(int(refused[i]), refused_s[i], signs[i], delays[i]) for i in range(n_trials)
     ]
     delays = np.where(refused != 0, np.nan, delays)
     signs = np.where(refused != 0, 0.0, signs)
-    load, nominal = foot_load(foot, trials, stance_signals(trials, gait, time), heel_contact, time)
     run = _run_walking(setup, load, onset, signs, advance, fault)
     channels = force_channels(run.wrench, p, art, rng)
     true_angle = nominal.angle_rad + run.angle
