@@ -1050,8 +1050,10 @@ def test_no_change_is_asserted_where_the_stiffness_is_poorly_determined():
     from anklelab.experiments import simulate_perturberator
 
     session = simulate_perturberator(trials_per_point=8, n_unperturbed=16, n_calibration=2, seed=5)
-    # the window's own change (the neighbours' is precise enough never to reach it here)
-    result = analyze_walking(session, WalkingSettings(bootstrap_reps=10, change_basis="window"))
+    # the window's own change (the neighbours' is precise enough never to reach it here), with
+    # each point's own inertia (the session's determines the stiffness well even here)
+    window = WalkingSettings(bootstrap_reps=10, change_basis="window", inertia_model="point")
+    result = analyze_walking(session, window)
     points = result.timing_points
     assert any(
         tp.stiffness_change_probability >= 0.5 and tp.stiffness.poorly_determined for tp in points
@@ -1135,9 +1137,10 @@ def test_damping_and_inertia_come_from_the_linear_model_where_the_stiffness_chan
 
 def test_the_automatic_choice_takes_damping_and_inertia_from_the_linear_model():
     """Where the automatic choice keeps the constant stiffness, damping and inertia are still
-    the linear model's; a model set by hand gives all three (paper 000's constant model)."""
+    the linear model's; a model set by hand gives all three (paper 000's constant model). Each
+    point's own inertia, so that a model forced by hand fits the same inertia as the choice."""
     session = _twin(trials_per_point=12, n_unperturbed=24, n_calibration=2, bench=False, seed=5)
-    quick = {"bootstrap_reps": 10, "interval_reps": 40}
+    quick = {"bootstrap_reps": 10, "interval_reps": 40, "inertia_model": "point"}
     auto = analyze_walking(session, WalkingSettings(**quick))
     linear = analyze_walking(session, WalkingSettings(stiffness_model="linear", **quick))
     constant = analyze_walking(session, WalkingSettings(stiffness_model="constant", **quick))
@@ -1161,7 +1164,9 @@ def test_a_delayed_twist_correction_widens_the_damping_by_its_lag(lag):
     """A coupler of damping c twists behind T / K by c / K: delaying a correction ``a θ`` by
     ``τ`` adds ``a τ θ'``, so the damping's interval grows by ``a τ``; the correction's own
     size (``a``) stays in the stiffness's."""
-    from anklelab.pipelines.walking.impedance import _fit, _systematic
+    from types import SimpleNamespace
+
+    from anklelab.pipelines.walking.impedance import _Condition, _fit, _systematic
 
     angle, vel, acc = _perturbation(0.05, n=200)
     t = np.arange(angle.size) / FS
@@ -1171,7 +1176,9 @@ def test_a_delayed_twist_correction_widens_the_damping_by_its_lag(lag):
     quantities = ("stiffness", "damping", "inertia")
     centre = {q: float(np.ravel(getattr(fitted, q))[0]) for q in quantities}
     a = 500.0  # N·m/rad: the twist correction's part of the torque response
-    moves = _systematic(full, a * angle, angle.size, "constant", 0, lag, FS, centre, None)
+    condition = _Condition("dorsi/100", SimpleNamespace(twist_torque=a * angle), full)
+    variants, timing = condition.variants(angle.size, 0, lag, FS)
+    moves = _systematic(_fit(variants, None, "constant", FS), timing, centre, None)
     assert centre["stiffness"] == pytest.approx(K, rel=1e-6)
     assert moves["stiffness"] == pytest.approx(a, rel=0.01)
     assert moves["damping"] == pytest.approx(a * lag / FS, rel=0.05, abs=1e-6)

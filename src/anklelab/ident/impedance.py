@@ -41,7 +41,15 @@ from anklelab.errors import ParameterError
 from anklelab.ident._base import Estimator, one_of
 from anklelab.signals import vaf
 
-__all__ = ["ImpedanceFit", "ImpedanceModel", "StiffnessModel", "fit_impedance", "impedance_torque"]
+__all__ = [
+    "ImpedanceFit",
+    "ImpedanceModel",
+    "InertiaTerms",
+    "StiffnessModel",
+    "fit_impedance",
+    "impedance_torque",
+    "inertia_terms",
+]
 
 StiffnessModel = Literal["constant", "linear"]
 """How the stiffness may change within the window: ``k`` or ``k + k₁ (t - t_c)``."""
@@ -126,6 +134,7 @@ def fit_impedance(
     stiffness_model: StiffnessModel = "constant",
     fs: float | None = None,
     time_angle: ArrayLike | None = None,
+    inertia: ArrayLike | None = None,
 ) -> ImpedanceFit:
     """Fit ``T = I θ'' + b θ' + k θ`` over windows that start at the first sample.
 
@@ -147,6 +156,10 @@ def fit_impedance(
         The linear model's regressor of ``k₁``: time from the first sample, s, times the
         unfiltered angle, rad, low-passed as the torque and ``θ`` were (see the module
         docstring). Omitted: ``t θ`` from the ``θ`` given, right for unfiltered data.
+    inertia : array_like, optional
+        A known inertia, kg·m², shaped like the fields (or broadcastable to them): only the
+        stiffness and damping are fitted, to ``T - I θ''``, and the fit's ``inertia`` is this
+        one (for an inertia shared by several records, see :func:`inertia_terms`).
 
     Returns
     -------
@@ -172,48 +185,173 @@ def fit_impedance(
     True
     >>> round(float(fit.stiffness_slope), 6), round(float(fit.damping), 6)
     (2000.0, 2.0)
+
+    With the inertia known, the rest is fitted around it:
+
+    >>> fit = fit_impedance(kin, [1200.0, 2.0, 0.3] @ kin, inertia=0.3)
+    >>> [round(float(v), 6) for v in fit[:3]]
+    [1200.0, 2.0, 0.3]
     """
-    kin, tq = _check(kinematics, torque)
-    linear = _check_model(stiffness_model)
-    n_times = tq.shape[-1]
-    single = lengths is None
-    sizes = np.array([n_times] if single else lengths, dtype=int)
-    if sizes.size == 0 or np.any((sizes < 3 + linear) | (sizes > n_times)):
-        raise ParameterError(
-            f"lengths: expected window lengths between {3 + linear} and {n_times} samples, "
-            f"got {lengths!r}"
-        )
-    x = np.moveaxis(kin, -2, -1)  # (..., n_times, 3)
-    if linear:
-        time = np.arange(n_times) / _sample_rate(fs)
-        product = time * kin[..., 0, :] if time_angle is None else _check_product(time_angle, tq)
-        x = np.concatenate([x, product[..., None]], axis=-1)  # (..., n_times, 4)
-    scale = np.sqrt((x[..., : sizes.max(), :] ** 2).mean(axis=-2, keepdims=True))
-    scale = np.where(scale > 0, scale, 1.0)
-    x = x / scale
-    gram = _window_sums(x[..., :, None] * x[..., None, :], sizes, axis=-3)
-    cross = _window_sums(x * tq[..., None], sizes, axis=-2)
-    sum_x = _window_sums(x, sizes, axis=-2)
-    sum_t = _window_sums(tq, sizes, axis=-1)
-    sum_tt = _window_sums(tq**2, sizes, axis=-1)
-    coef = np.linalg.solve(gram, cross[..., None])[..., 0]  # (..., n_windows, n_regressors)
-    res_ss = sum_tt - 2 * (coef * cross).sum(-1) + np.einsum("...i,...ij,...j", coef, gram, coef)
-    res_mean = (sum_t - (coef * sum_x).sum(-1)) / sizes
-    total = sum_tt / sizes - (sum_t / sizes) ** 2
+    terms = _NormalTerms.of(kinematics, torque, lengths, stiffness_model, fs, time_angle)
+    gram, cross, sizes = terms.gram, terms.cross, terms.sizes
+    if inertia is None:
+        coef = np.linalg.solve(gram, cross[..., None])[..., 0]
+    else:  # in the scaled regressors' units; the others solved for T - I θ''
+        known = terms.from_fields(np.asarray(inertia, dtype=float)) * terms.scale[..., _INERTIA]
+        rest = terms.others
+        shifted = cross[..., rest] - known[..., None] * gram[..., rest, _INERTIA]
+        solved = np.linalg.solve(gram[..., rest, :][..., rest], shifted[..., None])[..., 0]
+        coef = np.insert(solved, _INERTIA, known, axis=-1)
+    res_ss = terms.sum_tt - 2 * (coef * cross).sum(-1)
+    res_ss = res_ss + np.einsum("...i,...ij,...j", coef, gram, coef)
+    res_mean = (terms.sum_t - (coef * terms.sum_x).sum(-1)) / sizes
+    total = terms.sum_tt / sizes - (terms.sum_t / sizes) ** 2
     with np.errstate(invalid="ignore", divide="ignore"):
         vaf_percent = 100.0 * (1.0 - (res_ss / sizes - res_mean**2) / total)
-    coef = coef / scale
+    coef = coef / terms.scale
     stiffness, slope = coef[..., 0], np.zeros_like(coef[..., 0])
-    if linear:
+    if terms.centre is not None:
         # (k - k1 t_c) θ + k1 t θ: the θ coefficient is moved to t_c = Σ t θ² / Σ θ²
-        weight = kin[..., 0, :] ** 2
-        centre = _window_sums(weight * time, sizes, -1) / _window_sums(weight, sizes, -1)
         slope = coef[..., 3]
-        stiffness = stiffness + slope * centre
-    fields = (stiffness, coef[..., 1], coef[..., 2], vaf_percent, slope)
-    if single:
-        return ImpedanceFit(*(f[..., 0] for f in fields))
-    return ImpedanceFit(*(np.moveaxis(f, -1, 0) for f in fields))
+        stiffness = stiffness + slope * terms.centre
+    fields = (stiffness, coef[..., 1], coef[..., _INERTIA], vaf_percent, slope)
+    return ImpedanceFit(*(terms.to_fields(f) for f in fields))
+
+
+class InertiaTerms(NamedTuple):
+    """One record's share of the least-squares inertia of a joint fit, in which several records
+    share one inertia and each keeps its own stiffness and damping (and slope).
+
+    With ``z`` the record's θ'' less its projection on the other regressors (``θ``, ``θ'``, and
+    ``t θ`` with the linear model), ``numerator = Σ z T`` (N·m·rad/s²) and ``denominator =
+    Σ z²`` ((rad/s²)²): ``numerator / denominator`` is the record's own inertia, and the sums of
+    both over the records give the shared one (kg·m²), to pass to :func:`fit_impedance`.
+    """
+
+    numerator: NDArray[np.float64]
+    denominator: NDArray[np.float64]
+
+
+def inertia_terms(
+    kinematics: ArrayLike,
+    torque: ArrayLike,
+    lengths: Sequence[int] | None = None,
+    *,
+    stiffness_model: StiffnessModel = "constant",
+    fs: float | None = None,
+    time_angle: ArrayLike | None = None,
+) -> InertiaTerms:
+    """Each record's :class:`InertiaTerms` (arguments as :func:`fit_impedance`; the terms are
+    shaped like its fields).
+
+    Examples
+    --------
+    Two records of one inertia (0.3 kg·m²) with different stiffness and damping:
+
+    >>> import numpy as np
+    >>> t = np.arange(100) / 1000.0
+    >>> th = 0.035 * np.clip(t / 0.075, 0, 1) + 0.001 * np.sin(90 * t)
+    >>> kin = np.stack([th, np.gradient(th, t), np.gradient(np.gradient(th, t), t)])
+    >>> both = np.stack([kin, kin])
+    >>> torque = np.stack([[1200.0, 2.0, 0.3] @ kin, [800.0, 5.0, 0.3] @ kin])
+    >>> terms = inertia_terms(both, torque)
+    >>> shared = terms.numerator.sum() / terms.denominator.sum()
+    >>> round(float(shared), 6)
+    0.3
+    >>> [round(float(k), 6) for k in fit_impedance(both, torque, inertia=shared).stiffness]
+    [1200.0, 800.0]
+    """
+    terms = _NormalTerms.of(kinematics, torque, lengths, stiffness_model, fs, time_angle)
+    rest = terms.others
+    inner = terms.gram[..., rest, :][..., rest]
+    mixed = terms.gram[..., rest, _INERTIA]  # θ'' against the others
+    solved = np.linalg.solve(inner, np.stack([mixed, terms.cross[..., rest]], axis=-1))
+    numerator = terms.cross[..., _INERTIA] - (mixed * solved[..., 1]).sum(-1)
+    denominator = terms.gram[..., _INERTIA, _INERTIA] - (mixed * solved[..., 0]).sum(-1)
+    scale = terms.scale[..., _INERTIA]  # from the scaled regressor back to rad/s²
+    return InertiaTerms(terms.to_fields(numerator * scale), terms.to_fields(denominator * scale**2))
+
+
+_INERTIA = 2
+"""Column of θ'' among the regressors."""
+
+
+class _NormalTerms(NamedTuple):
+    """The normal-equation sums of each window (leading axes, then the windows' axis), over the
+    regressors ``θ, θ', θ''`` (and ``t θ``), each divided by its root mean square ``scale``."""
+
+    gram: NDArray[np.float64]
+    cross: NDArray[np.float64]
+    sum_x: NDArray[np.float64]
+    sum_t: NDArray[np.float64]
+    sum_tt: NDArray[np.float64]
+    scale: NDArray[np.float64]
+    sizes: NDArray[np.int64]
+    centre: NDArray[np.float64] | None
+    """The linear model's ``t_c`` of each window (None with the constant model), s."""
+    single: bool
+    """No window lengths were given: the fields drop the windows' axis."""
+
+    @classmethod
+    def of(
+        cls,
+        kinematics: ArrayLike,
+        torque: ArrayLike,
+        lengths: Sequence[int] | None,
+        stiffness_model: str,
+        fs: float | None,
+        time_angle: ArrayLike | None,
+    ) -> _NormalTerms:
+        kin, tq = _check(kinematics, torque)
+        linear = _check_model(stiffness_model)
+        n_times = tq.shape[-1]
+        sizes = np.array([n_times] if lengths is None else lengths, dtype=int)
+        if sizes.size == 0 or np.any((sizes < 3 + linear) | (sizes > n_times)):
+            raise ParameterError(
+                f"lengths: expected window lengths between {3 + linear} and {n_times} "
+                f"samples, got {lengths!r}"
+            )
+        x = np.moveaxis(kin, -2, -1)  # (..., n_times, 3)
+        centre = None
+        if linear:
+            time = np.arange(n_times) / _sample_rate(fs)
+            product = (
+                time * kin[..., 0, :] if time_angle is None else _check_product(time_angle, tq)
+            )
+            x = np.concatenate([x, product[..., None]], axis=-1)  # (..., n_times, 4)
+            weight = kin[..., 0, :] ** 2
+            centre = _window_sums(weight * time, sizes, -1) / _window_sums(weight, sizes, -1)
+        scale = np.sqrt((x[..., : sizes.max(), :] ** 2).mean(axis=-2, keepdims=True))
+        scale = np.where(scale > 0, scale, 1.0)
+        x = x / scale
+        return cls(
+            gram=_window_sums(x[..., :, None] * x[..., None, :], sizes, axis=-3),
+            cross=_window_sums(x * tq[..., None], sizes, axis=-2),
+            sum_x=_window_sums(x, sizes, axis=-2),
+            sum_t=_window_sums(tq, sizes, axis=-1),
+            sum_tt=_window_sums(tq**2, sizes, axis=-1),
+            scale=scale,
+            sizes=sizes,
+            centre=centre,
+            single=lengths is None,
+        )
+
+    @property
+    def others(self) -> list[int]:
+        """Columns of every regressor but θ''."""
+        return [i for i in range(self.gram.shape[-1]) if i != _INERTIA]
+
+    def to_fields(self, values: NDArray[np.float64]) -> NDArray[np.float64]:
+        """``(..., n_windows)`` values as a fit's field: ``(n_windows, ...)``, or ``(...)`` when
+        no window lengths were given."""
+        return values[..., 0] if self.single else np.moveaxis(values, -1, 0)
+
+    def from_fields(self, values: NDArray[np.float64]) -> NDArray[np.float64]:
+        """Field-shaped values (or values that broadcast to the fields) as ``(..., n_windows)``."""
+        leading = self.sum_t.shape  # (..., n_windows)
+        if self.single:
+            return np.broadcast_to(np.asarray(values)[..., None], leading)
+        return np.moveaxis(np.broadcast_to(values, (leading[-1], *leading[:-1])), 0, -1)
 
 
 def impedance_torque(

@@ -24,7 +24,7 @@ from anklelab.pipelines.walking.checks import (
     plausibility,
     walking_direction,
 )
-from anklelab.pipelines.walking.impedance import condition_order, estimate_timing_point
+from anklelab.pipelines.walking.impedance import condition_order, estimate_timing_points
 from anklelab.pipelines.walking.responses import condition_responses, outliers
 from anklelab.pipelines.walking.results import WalkingResults
 from anklelab.pipelines.walking.settings import WalkingSettings
@@ -114,18 +114,15 @@ def analyze_walking(
     report(STEPS[2])
     stance = _drop_unperturbed_outliers(stance, settings.outlier_mads)
     unperturbed = stance["none"]
-    rng = np.random.default_rng(settings.seed)
-    points = []
+    responses = {}
     for key in condition_order(stance):
-        responses = condition_responses(stance, key, unperturbed, settings)
-        if responses.dropped:
-            wild = np.isin(stance.selection, list(responses.dropped))
-            stance = stance.drop(wild, [responses.dropped[p] for p in stance.selection[wild]])
-        points.append(
-            estimate_timing_point(
-                responses, key, len(unperturbed), settings, rng, bias_unknown=bool(uncorrected)
-            )
-        )
+        responses[key] = condition_responses(stance, key, unperturbed, settings)
+        if dropped := responses[key].dropped:
+            wild = np.isin(stance.selection, list(dropped))
+            stance = stance.drop(wild, [dropped[p] for p in stance.selection[wild]])
+    points = estimate_timing_points(
+        responses, len(unperturbed), settings, settings.seed, bias_unknown=bool(uncorrected)
+    )
     points = pool_changes(points, settings, samples(settings.window_ms, stance.fs) / stance.fs)
     report(STEPS[3])
     held_out = len(session.calibration) > 1

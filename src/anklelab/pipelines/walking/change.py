@@ -251,7 +251,7 @@ def pool_changes(
     Parameters
     ----------
     points : list of TimingPoint
-        Every timing point of the session, as :func:`~.impedance.estimate_timing_point` gives
+        Every timing point of the session, as :func:`~.impedance.estimate_timing_points` gives
         them (their change from their own window).
     settings : WalkingSettings
         ``change_basis``, ``change_threshold`` and ``change_confidence``.

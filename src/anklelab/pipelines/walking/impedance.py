@@ -38,7 +38,8 @@ and judges it again (:mod:`.change`).
 
 from __future__ import annotations
 
-from dataclasses import replace
+from collections.abc import Mapping
+from dataclasses import dataclass, replace
 
 import numpy as np
 from numpy.typing import NDArray
@@ -49,6 +50,7 @@ from anklelab.ident.impedance import (
     StiffnessModel,
     fit_impedance,
     impedance_torque,
+    inertia_terms,
 )
 from anklelab.pipelines.walking.change import change_warning, judge_change
 from anklelab.pipelines.walking.responses import RESPONSE, Responses
@@ -57,7 +59,7 @@ from anklelab.pipelines.walking.settings import WalkingSettings
 from anklelab.pipelines.walking.stance import samples
 from anklelab.signals import Trials, advance, bootstrap_weights
 
-__all__ = ["DIRECTIONS", "condition_order", "estimate_timing_point"]
+__all__ = ["DIRECTIONS", "condition_order", "estimate_timing_points"]
 
 DIRECTIONS = ("dorsi", "plantar")
 KINEMATICS = ("angle", "velocity", "acceleration")
@@ -94,9 +96,14 @@ def _draw_counts(n: int, n_reps: int, rng: np.random.Generator) -> NDArray[np.in
 
 
 def _fit(
-    averages: NDArray[np.float64], lengths: list[int] | None, model: StiffnessModel, fs: float
+    averages: NDArray[np.float64],
+    lengths: list[int] | None,
+    model: StiffnessModel,
+    fs: float,
+    inertia: NDArray[np.float64] | None = None,
 ) -> ImpedanceFit:
-    """The impedance of stacked response averages (channels :data:`RESPONSE`)."""
+    """The impedance of stacked response averages (channels :data:`RESPONSE`), around a known
+    ``inertia`` (shaped like the fit's fields) if given."""
     return fit_impedance(
         averages[:, _KIN],
         averages[:, _TORQUE],
@@ -104,6 +111,7 @@ def _fit(
         stiffness_model=model,
         fs=fs,
         time_angle=averages[:, _TIME_ANGLE],
+        inertia=inertia,
     )
 
 
@@ -117,29 +125,111 @@ def _focused_choice(constant: NDArray[np.float64], linear: NDArray[np.float64]) 
     return "linear" if np.var(linear[1:], ddof=1) < mse_constant else "constant"
 
 
+@dataclass(frozen=True)
+class _Condition:
+    """One condition's responses and their stacked averages: over all perturbed trials
+    (:data:`_FULL`), then ``interval_reps`` resamples, then paper 000's subsets."""
+
+    key: str
+    responses: Responses
+    averages: NDArray[np.float64]
+
+    def variants(self, n: int, shift: int, lag: float, fs: float) -> tuple[NDArray, int]:
+        """The all-trial average over the first ``n`` samples under what the data cannot pin
+        down (see :func:`_systematic`), stacked: the torque ``shift`` samples later and earlier
+        than the kinematics (when the average is long enough), without the coupler's twist
+        correction, and with it taken ``lag`` samples earlier and later. Also returns how many
+        come first for the timing (0 or 2)."""
+        full, twist = self.averages[_FULL], self.responses.twist_torque
+        out = []
+        if shift and full.shape[-1] >= n + shift:
+            for lead in (shift, -shift):  # torque later / earlier than the kinematics
+                k0, t0 = (0, lead) if lead > 0 else (-lead, 0)
+                shifted = full[:, k0 : k0 + n].copy()
+                shifted[_TORQUE] = full[_TORQUE, t0 : t0 + n]
+                shifted[_TIME_ANGLE] -= k0 / fs * shifted[_KIN[0]]  # time from the window start
+                out.append(shifted)
+        timing = len(out)
+        untwisted = full[:, :n].copy()
+        untwisted[_TORQUE] += twist[:n]
+        out.append(untwisted)
+        for early in (lag, -lag):  # the correction taken `lag` samples earlier and later
+            moved = full[:, :n].copy()
+            moved[_TORQUE] += (twist - advance(twist, early))[:n]
+            out.append(moved)
+        return np.stack(out), timing
+
+
+@dataclass(frozen=True)
+class _SharedInertia:
+    """The session's one inertia (kg·m²), fitted jointly over every condition, each with its own
+    stiffness and damping: for each stacked average (``rows``), for the all-trial averages over
+    each sensitivity window (``windows``) and under each of :meth:`_Condition.variants`
+    (``variants``); ``n_trials``, the perturbed trials behind it."""
+
+    rows: NDArray[np.float64]
+    windows: NDArray[np.float64]
+    variants: NDArray[np.float64]
+    n_trials: int
+
+    @classmethod
+    def fit(
+        cls,
+        conditions: list[_Condition],
+        model: StiffnessModel,
+        lengths: list[int],
+        fs: float,
+        shift: int,
+        lag: float,
+    ) -> _SharedInertia:
+        """Sum each condition's share (:func:`~anklelab.ident.inertia_terms`) with ``model``."""
+        n = lengths[0]
+        shares = []
+        for condition in conditions:
+            averages = condition.averages
+            variants, _ = condition.variants(n, shift, lag, fs)
+            parts = [(averages[..., :n], None), (variants, None)]
+            if len(lengths) > 1:
+                parts.append((averages[_FULL : _FULL + 1], lengths[1:]))
+            shares.append(
+                [
+                    inertia_terms(
+                        stack[:, _KIN],
+                        stack[:, _TORQUE],
+                        windows,
+                        stiffness_model=model,
+                        fs=fs,
+                        time_angle=stack[:, _TIME_ANGLE],
+                    )
+                    for stack, windows in parts
+                ]
+            )
+        shared = [
+            sum(share[i].numerator for share in shares)
+            / sum(share[i].denominator for share in shares)
+            for i in range(len(shares[0]))
+        ]
+        windows = shared[2][:, 0] if len(lengths) > 1 else np.zeros(0)
+        n_trials = sum(len(c.responses.perturbed) for c in conditions)
+        return cls(shared[0], windows, shared[1], n_trials)
+
+
 def _systematic(
-    full: NDArray[np.float64],
-    twist_torque: NDArray[np.float64],
-    n: int,
-    model: StiffnessModel,
-    shift: int,
-    lag: float,
-    fs: float,
-    centre: dict[str, float],
-    by_window: ImpedanceFit | None,
+    variants: ImpedanceFit, timing: int, centre: dict[str, float], by_window: ImpedanceFit | None
 ) -> dict[str, float]:
     """How far each all-trial estimate (``centre``) moves under what the data cannot pin down.
 
+    ``variants`` is the fit of :meth:`_Condition.variants` (``timing`` timing variants first).
     Three independent sources, added in quadrature:
 
-    - *Timing and window*: the largest move when the torque of the all-trial average ``full``
-      (channels :data:`RESPONSE`, shape ``(1, 5, n_times)``) is shifted by ``±shift`` samples
-      against the kinematics (the timing between the encoder and the plate's channels,
-      anti-alias filters and converter skew included, is known only to about a sample:
-      ``θ(t - δ) ≈ θ - δ θ'`` moves damping by ``k δ`` and inertia by ``b δ``), and, for damping
-      and inertia, across the sensitivity windows' fits ``by_window`` (a stiffness that changes
-      within the window leaks into them). The stiffness's change between windows is a real
-      change over time, not an error, and is left out.
+    - *Timing and window*: the largest move when the torque of the all-trial average is
+      shifted by ``±timing_uncertainty_ms`` against the kinematics (the timing between the
+      encoder and the plate's channels, anti-alias filters and converter skew included, is
+      known only to about a sample: ``θ(t - δ) ≈ θ - δ θ'`` moves damping by ``k δ`` and
+      inertia by ``b δ``), and, for damping and inertia, across the sensitivity windows' fits
+      ``by_window`` (a stiffness that changes within the window leaks into them). The
+      stiffness's change between windows is a real change over time, not an error, and is left
+      out.
     - *The coupler's twist*: the move when the torque is taken without the twist correction
       (``twist_torque`` added, :class:`~.responses.Responses`).
       The correction is quasi-static, with the paper's coupler stiffness; the coupler's own
@@ -147,37 +237,26 @@ def _systematic(
       couplers are 0.75-1.3 times as stiff and damped, the error left after it was 0.8 times
       (stiffness) to 1.3-1.8 times (damping) the correction's own size (medians), so its whole
       size counts.
-    - *The coupler's damping*: the larger move when the twist correction is taken ``lag``
-      samples earlier or later. A coupler of damping ``c`` twists as ``T / (K + c s)``, behind
-      ``T / K`` by ``c / K``, which the correction takes as ``coupler_lag_ms``; no lab knows
-      ``c``, and on a stiff foot the damping estimate is most sensitive to it.
+    - *The coupler's damping*: the larger move when the twist correction is taken
+      ``coupler_lag_ms`` earlier or later. A coupler of damping ``c`` twists as
+      ``T / (K + c s)``, behind ``T / K`` by ``c / K``, which the correction takes as
+      ``coupler_lag_ms``; no lab knows ``c``, and on a stiff foot the damping estimate is most
+      sensitive to it.
 
-    Returns the systematic half-width per quantity (``stiffness``, ``damping``, ``inertia``).
+    With the session's shared inertia each variant's fit takes that variant's shared inertia,
+    so the inertia's own moves are the shared one's. Returns the systematic half-width per
+    quantity (``stiffness``, ``damping``, ``inertia``).
     """
-    variants = []
-    if shift and full.shape[-1] >= n + shift:
-        for lead in (shift, -shift):  # torque later / earlier than the kinematics
-            k0, t0 = (0, lead) if lead > 0 else (-lead, 0)
-            shifted = full[..., k0 : k0 + n].copy()
-            shifted[:, _TORQUE] = full[:, _TORQUE, t0 : t0 + n]
-            shifted[:, _TIME_ANGLE] -= k0 / fs * shifted[:, _KIN[0]]  # time from the window start
-            variants.append(_fit(shifted, None, model, fs))
-    untwisted = full[..., :n].copy()
-    untwisted[:, _TORQUE] += twist_torque[:n]
-    twist = _fit(untwisted, None, model, fs)
-    lagged = []  # the correction taken `lag` samples earlier and later
-    for early in (lag, -lag):
-        moved_twist = full[..., :n].copy()
-        moved_twist[:, _TORQUE] += (twist_torque - advance(twist_torque, early))[:n]
-        lagged.append(_fit(moved_twist, None, model, fs))
     moves = {}
     for name, value in centre.items():
-        fits = variants if name == "stiffness" or by_window is None else [*variants, by_window]
-        moved = [np.ravel(getattr(fit, name)) - value for fit in fits]
-        timing = np.abs(np.concatenate([np.zeros(1), *moved])).max()
-        twist_size = np.ravel(getattr(twist, name))[0] - value
-        twist_lag = max(abs(np.ravel(getattr(fit, name))[0] - value) for fit in lagged)
-        moves[name] = float(np.linalg.norm([timing, twist_size, twist_lag]))
+        moved = np.ravel(getattr(variants, name)) - value
+        timing_moves = [np.zeros(1), moved[:timing]]
+        if name != "stiffness" and by_window is not None:
+            timing_moves.append(np.ravel(getattr(by_window, name)) - value)
+        largest = np.abs(np.concatenate(timing_moves)).max()
+        twist_size = moved[timing]
+        twist_lag = np.abs(moved[timing + 1 :]).max()
+        moves[name] = float(np.linalg.norm([largest, twist_size, twist_lag]))
     return moves
 
 
@@ -208,55 +287,97 @@ def _estimate(
     return Estimate(centre, sd(subsets), interval, subsets, bias_unknown=bias_unknown)
 
 
-def estimate_timing_point(
-    responses: Responses,
-    key: str,
+def estimate_timing_points(
+    responses: Mapping[str, Responses],
     n_unperturbed: int,
     settings: WalkingSettings,
     seed: int | np.random.Generator,
     *,
     bias_unknown: bool = False,
-) -> TimingPoint:
-    """Impedance of condition ``key`` (``"dorsi/225"``) from its adjusted responses.
+) -> list[TimingPoint]:
+    """Impedance of every condition, in the order given.
 
     Parameters
     ----------
-    responses : Responses
-        The condition's responses (:func:`~.responses.condition_responses`).
-    key : str
-        The condition.
+    responses : mapping of str to Responses
+        Each condition's (``"dorsi/225"``) responses (:func:`~.responses.condition_responses`).
     n_unperturbed : int
         Unperturbed trials behind the nominal stance.
     settings : WalkingSettings
-        Windows, stiffness model, resampling and diagnostic settings.
+        Windows, stiffness and inertia models, resampling and diagnostic settings.
     seed : int or numpy.random.Generator
-        Draws the resamples and subsets (a Generator continues its stream).
+        Draws the resamples and subsets, condition by condition (a Generator continues its
+        stream).
     bias_unknown : bool
         The torque carries a bias the intervals cannot bound (the platform's own moment left in
         it, :func:`~.calibration.uncorrected_moment`): the impedance, its slope and its change
         are flagged (poorly determined), before the change is judged.
     """
     rng = np.random.default_rng(seed)
+    conditions = [_Condition(key, r, _stacked(r, settings, rng)) for key, r in responses.items()]
+    if not conditions:
+        return []
+    fs = conditions[0].responses.perturbed.fs
+    lengths = [samples(w, fs) for w in settings.windows_ms()]
+    shift = round(settings.timing_uncertainty_ms * fs / 1000.0)
+    lag = settings.coupler_lag_ms * fs / 1000.0
+    shared = None
+    if settings.inertia_model == "session":
+        model = _rest_model(settings)
+        shared = _SharedInertia.fit(conditions, model, lengths, fs, shift, lag)
+    return [
+        _timing_point(condition, n_unperturbed, settings, shared, bias_unknown)
+        for condition in conditions
+    ]
+
+
+def _stacked(
+    responses: Responses, settings: WalkingSettings, rng: np.random.Generator
+) -> NDArray[np.float64]:
+    """The condition's averages: over all perturbed trials, over ``interval_reps`` resamples
+    (:func:`_resampled`) and over paper 000's subsets."""
+    trials = responses.perturbed
+    subsets = bootstrap_weights(
+        len(trials), settings.bootstrap_reps, settings.bootstrap_fraction, random_state=rng
+    )
+    return np.concatenate(
+        [
+            trials.average()[None],
+            _resampled(responses, settings.interval_reps, rng),
+            np.tensordot(subsets, trials.data, axes=1),
+        ]
+    )
+
+
+def _rest_model(settings: WalkingSettings) -> StiffnessModel:
+    """The model damping and inertia come from: the linear one with the automatic choice,
+    whichever gives the stiffness (a stiffness that changes within the window, fitted as
+    constant, puts its ``k' θ`` into them; module docstring); a model set by hand gives all
+    three, as paper 000's constant model does."""
+    return "linear" if settings.stiffness_model == "auto" else settings.stiffness_model
+
+
+def _timing_point(
+    condition: _Condition,
+    n_unperturbed: int,
+    settings: WalkingSettings,
+    shared: _SharedInertia | None,
+    bias_unknown: bool,
+) -> TimingPoint:
+    """One condition's :class:`TimingPoint` (arguments as :func:`estimate_timing_points`;
+    ``shared``: the session's inertia, or None for the point's own)."""
+    key, responses, averages = condition.key, condition.responses, condition.averages
     trials = responses.perturbed
     fs = trials.fs
     windows = settings.windows_ms()
     lengths = [samples(w, fs) for w in windows]
     n = lengths[0]
-    subsets = bootstrap_weights(
-        len(trials), settings.bootstrap_reps, settings.bootstrap_fraction, random_state=rng
-    )
     reps = settings.interval_reps
-    averages = np.concatenate(
-        [
-            trials.average()[None],
-            _resampled(responses, reps, rng),
-            np.tensordot(subsets, trials.data, axes=1),
-        ]
-    )
     paper = slice(1 + reps, None)
     main = averages[..., :n]  # every resample fits the analysis window only
-    constant = _fit(main, [n], "constant", fs)
-    linear = _fit(main, [n], "linear", fs)
+    rows = None if shared is None else shared.rows[None]
+    constant = _fit(main, [n], "constant", fs, rows)
+    linear = _fit(main, [n], "linear", fs, rows)
     model: StiffnessModel = (
         _focused_choice(constant.stiffness[0], linear.stiffness[0])
         if settings.stiffness_model == "auto"
@@ -268,11 +389,7 @@ def estimate_timing_point(
     full = averages[_FULL : _FULL + 1]
     shift = round(settings.timing_uncertainty_ms * fs / 1000.0)
     lag = settings.coupler_lag_ms * fs / 1000.0
-    # the stiffness (and the VAF) from the chosen model; with the automatic choice, damping and
-    # inertia from the linear one whichever is chosen: a stiffness that changes within the
-    # window, fitted as constant, puts its k' θ into them (module docstring). A model set by
-    # hand gives all three, as paper 000's constant model does.
-    rest: StiffnessModel = "linear" if settings.stiffness_model == "auto" else model
+    rest = _rest_model(settings)
     source: dict[str, StiffnessModel] = {
         "stiffness": model,
         "damping": rest,
@@ -280,24 +397,29 @@ def estimate_timing_point(
         "vaf": model,
     }
     fitted = {"constant": constant, "linear": linear}
+    at_windows = None if shared is None else shared.windows[:, None]
     window_fits = {  # each model's fits over the sensitivity windows
-        name: _fit(full, lengths[1:], name, fs) if len(lengths) > 1 else None
+        name: _fit(full, lengths[1:], name, fs, at_windows) if len(lengths) > 1 else None
         for name in dict.fromkeys(source.values())
     }
+    variants, timing = condition.variants(n, shift, lag, fs)
+    at_variants = None if shared is None else shared.variants
     systematic: dict[str, float] = {}
     for name, windows_fit in window_fits.items():
         centre = {
             q: float(getattr(fitted[name], q)[0][_FULL]) for q in _SYSTEMATIC if source[q] == name
         }
-        systematic |= _systematic(
-            full, responses.twist_torque, n, name, shift, lag, fs, centre, windows_fit
-        )
+        variant_fits = _fit(variants, None, name, fs, at_variants)
+        systematic |= _systematic(variant_fits, timing, centre, windows_fit)
+    behind = {q: len(trials) for q in source}  # the trials each quantity rests on
+    if shared is not None:
+        behind["inertia"] = shared.n_trials
     estimates = {
         q: _estimate(
             getattr(fitted[name], q)[0],
             reps,
             paper,
-            len(trials),
+            behind[q],
             systematic.get(q, 0.0),
             bias_unknown and q in _SYSTEMATIC,
         )

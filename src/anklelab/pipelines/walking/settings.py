@@ -98,6 +98,12 @@ class WalkingSettings(Parameters):
         mean squared error (see :mod:`anklelab.pipelines.walking.impedance`). ``"constant"``:
         paper 000's model. ``"linear"``: always the changing stiffness. How each does on the
         randomised twin and the independent generator: docs/guide/walking-analysis.md.
+    inertia_model
+        ``"session"`` (default): one inertia for every timing point and direction of the
+        session (the foot and what moves with it do not change between them), fitted jointly
+        with each point's own stiffness and damping (see
+        :mod:`anklelab.pipelines.walking.impedance`); ``"point"``: each point's own, as paper
+        000 fits it.
     covariate_adjustment, adjustment_span_ms, adjustment_guard_ms, adjustment_bins
         Remove each trial's own gait variation, predicted from its raw signals over the
         ``adjustment_span_ms`` before its onset (ending ``adjustment_guard_ms`` before it, in
@@ -167,6 +173,7 @@ class WalkingSettings(Parameters):
     offset_reference_ms: float | None = Field(None, ge=0)
     sensitivity_windows_ms: tuple[float, ...] = (75.0, 125.0)
     stiffness_model: Literal["auto", "constant", "linear"] = "auto"
+    inertia_model: Literal["session", "point"] = "session"
     covariate_adjustment: bool = True
     adjustment_span_ms: float = Field(100.0, gt=0)
     adjustment_guard_ms: float = Field(5.0, ge=0)
