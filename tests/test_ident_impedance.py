@@ -182,3 +182,46 @@ def test_linear_model_estimator_and_model_torque():
         ImpedanceModel(stiffness_model="linear").fit(kin[:, :100], torque[:100])
     with pytest.raises(ParameterError, match="stiffness_model"):
         fit_impedance(kin, torque, stiffness_model="quadratic")  # type: ignore[arg-type]
+
+
+def test_a_shared_inertia_is_the_joint_fit_of_records_with_their_own_stiffness_and_damping():
+    """Records that share one inertia: the sums of their terms give the least-squares inertia of
+    the joint fit (each its own k, b; here also k₁), a fit around a given inertia equals the
+    free fit when given the free fit's own, and the shared inertia is the better determined
+    (whether the stiffnesses gain depends on the noise: see the walking pipeline's test)."""
+    from anklelab.ident import inertia_terms
+
+    rng = np.random.default_rng(3)
+    n_records, n = 8, 125
+    theta = _smooth_ramp(n)[None] * rng.uniform(0.7, 1.3, (n_records, 1))
+    kin = kinematics(theta, FS, 5)
+    k = rng.uniform(300.0, 1500.0, n_records)
+    b = rng.uniform(1.0, 6.0, n_records)
+    torque = k[:, None] * kin[:, 0] + b[:, None] * kin[:, 1] + INERTIA * kin[:, 2]
+    noisy = torque + rng.normal(0.0, 0.4, torque.shape)
+    for model in ("constant", "linear"):
+        options = {"stiffness_model": model, "fs": FS}
+        free = fit_impedance(kin, noisy, [100, 75, 125], **options)
+        terms = inertia_terms(kin, noisy, [100, 75, 125], **options)
+        assert terms.numerator.shape == terms.denominator.shape == (3, n_records)
+        assert np.allclose(terms.numerator / terms.denominator, free.inertia)
+        again = fit_impedance(kin, noisy, [100, 75, 125], inertia=free.inertia, **options)
+        assert all(np.allclose(a, f) for a, f in zip(again, free, strict=True))
+        shared = terms.numerator.sum(axis=1) / terms.denominator.sum(axis=1)
+        # the joint least squares, written out: per record [θ, θ' (, t θ)], one θ'' column
+        x = [kin[r, :2, :100].T for r in range(n_records)]
+        if model == "linear":
+            x = [np.column_stack([xr, np.arange(100) / FS * kin[r, 0, :100]]) for r, xr in
+                 enumerate(x)]  # fmt: skip
+        width = x[0].shape[1]
+        joint = np.zeros((n_records * 100, n_records * width + 1))
+        for r in range(n_records):
+            joint[r * 100 : (r + 1) * 100, r * width : (r + 1) * width] = x[r]
+            joint[r * 100 : (r + 1) * 100, -1] = kin[r, 2, :100]
+        coef, *_ = np.linalg.lstsq(joint, noisy[:, :100].ravel(), rcond=None)
+        assert shared[0] == pytest.approx(coef[-1], rel=1e-9)
+        around = fit_impedance(kin, noisy, [100, 75, 125], inertia=shared[:, None], **options)
+        assert np.all(around.inertia == shared[:, None])
+        assert abs(shared[0] - INERTIA) < np.abs(free.inertia[0] - INERTIA).mean()
+    exact = inertia_terms(kin, torque, stiffness_model="constant")
+    assert exact.numerator.sum() / exact.denominator.sum() == pytest.approx(INERTIA, rel=1e-9)

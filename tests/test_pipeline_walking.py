@@ -390,7 +390,11 @@ def test_results_document_has_exactly_the_contract_keys(analysed):
     for node in older["timing_points"]:
         del node["stiffness_change_verdict"], node["stiffness_change_probability"]
         del node["stiffness_change_in_window"]
-    (first, *_) = WalkingResults.from_dict(older).timing_points
+    del older["settings"]["inertia_model"]
+    read = WalkingResults.from_dict(older)
+    assert again.settings.inertia_model == "session"
+    assert read.settings.inertia_model == "point"  # what the analysis did before the setting
+    (first, *_) = read.timing_points
     assert first.stiffness_change_verdict is None and first.stiffness_change_in_window is None
     assert np.isnan(first.stiffness_change_probability)
     assert set(point["window_sensitivity"]["75"]) == {"stiffness_nm_per_rad"}
@@ -1203,3 +1207,32 @@ def test_the_twist_correction_takes_the_top_plates_own_loads_out_of_the_stiffnes
         points = analyze_walking(session, settings).timing_points
         estimates.append(np.array([tp.stiffness.mean for tp in points]))
     assert np.mean(estimates[1] / estimates[0] - 1) == pytest.approx(0.0, abs=0.005)
+
+
+@pytest.mark.parametrize("foot", ["prosthetic", "human"])
+def test_one_inertia_for_the_session_is_closer_to_the_truth_and_steadies_the_stiffness(foot):
+    """The foot and what moves with it weigh the same at every timing point: fitted once over
+    the session (each point keeping its own stiffness and damping), the inertia is one value with
+    one interval, closer to the truth than each point's own, and the stiffnesses, which each
+    point's own inertia pulled along with its noise, come out closer to theirs."""
+    session = _twin(
+        trials_per_point=30, n_unperturbed=80, n_calibration=2, bench=False, seed=0, foot=foot
+    )
+    ref = session.truth["reference"]
+    errors = {}
+    for model in ("point", "session"):
+        settings = WalkingSettings(bootstrap_reps=5, interval_reps=40, inertia_model=model)
+        points = analyze_walking(session, settings).timing_points
+        truth = [ref[tp.direction][f"{tp.delay_ms:g}"] for tp in points]
+        pairs = list(zip(points, truth, strict=True))
+        stiffness = [tp.stiffness.mean / t["stiffness_nm_per_rad"] - 1 for tp, t in pairs]
+        inertia = [tp.inertia.mean / t["inertia_kgm2"] - 1 for tp, t in pairs]
+        errors[model] = (np.sqrt(np.mean(np.square(stiffness))), np.mean(np.abs(inertia)))
+        if model == "session":
+            assert len({(tp.inertia.mean, tp.inertia.ci95) for tp in points}) == 1
+            low, high = points[0].inertia.ci95
+            assert low <= truth[0]["inertia_kgm2"] <= high
+        else:
+            assert len({tp.inertia.mean for tp in points}) == len(points)
+    assert errors["session"][0] < 0.8 * errors["point"][0]
+    assert errors["session"][1] < 0.5 * errors["point"][1]

@@ -86,7 +86,8 @@ def _summary(results: WalkingResults) -> Table:
         caption="cop: lever arm, cm; model: stiffness constant or changing within the window; "
         "Δ: stiffness changes within the window; Δ?: the data cannot tell whether it changes "
         f"by ±{100 * results.settings.change_threshold:g} %; ≈: poorly determined (interval "
-        "spans zero or exceeds ±50 %)",
+        "spans zero or exceeds ±50 %)"
+        + ("; I: one for the session" if results.settings.inertia_model == "session" else ""),
     )
     columns = ["condition", "n", "cop", "model"] + [f"{q.symbol} ({q.unit})" for q in QUANTITIES]
     for column in columns:

@@ -197,7 +197,8 @@ def fit_impedance(
     if inertia is None:
         coef = np.linalg.solve(gram, cross[..., None])[..., 0]
     else:  # in the scaled regressors' units; the others solved for T - I θ''
-        known = terms.from_fields(np.asarray(inertia, dtype=float)) * terms.scale[..., _INERTIA]
+        given = terms.from_fields(np.asarray(inertia, dtype=float))
+        known = given * terms.scale[..., _INERTIA]
         rest = terms.others
         shifted = cross[..., rest] - known[..., None] * gram[..., rest, _INERTIA]
         solved = np.linalg.solve(gram[..., rest, :][..., rest], shifted[..., None])[..., 0]
@@ -214,7 +215,8 @@ def fit_impedance(
         # (k - k1 t_c) θ + k1 t θ: the θ coefficient is moved to t_c = Σ t θ² / Σ θ²
         slope = coef[..., 3]
         stiffness = stiffness + slope * terms.centre
-    fields = (stiffness, coef[..., 1], coef[..., _INERTIA], vaf_percent, slope)
+    fitted_inertia = coef[..., _INERTIA] if inertia is None else given  # given: returned as is
+    fields = (stiffness, coef[..., 1], fitted_inertia, vaf_percent, slope)
     return ImpedanceFit(*(terms.to_fields(f) for f in fields))
 
 
