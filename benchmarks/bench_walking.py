@@ -72,15 +72,16 @@ def _trial(trial, info, settings, filters):
 
 PAPER_SETTINGS = {
     "stiffness_model": "constant",
+    "inertia_model": "point",
     "covariate_adjustment": False,
     "outlier_mads": 1e9,
     "interval_reps": 100,
     "transmission_stiffness_nm_per_rad": 0.0,
     "force_delay_ms": 0.0,
 }
-"""Paper 000's model, which the loop below implements: constant stiffness, no covariate
-adjustment, no outlier screen, the motor angle taken as the plate's, the plate's channels taken
-as recorded (paper 000's DAQ has no anti-alias filter to take out)."""
+"""Paper 000's model, which the loop below implements: constant stiffness, each point's own
+inertia, no covariate adjustment, no outlier screen, the motor angle taken as the plate's, the
+plate's channels taken as recorded (paper 000's DAQ has no anti-alias filter to take out)."""
 
 
 def per_trial_loop(session, settings):
