@@ -225,3 +225,14 @@ def test_a_shared_inertia_is_the_joint_fit_of_records_with_their_own_stiffness_a
         assert abs(shared[0] - INERTIA) < np.abs(free.inertia[0] - INERTIA).mean()
     exact = inertia_terms(kin, torque, stiffness_model="constant")
     assert exact.numerator.sum() / exact.denominator.sum() == pytest.approx(INERTIA, rel=1e-9)
+
+
+def test_a_known_inertia_of_the_wrong_shape_is_named_and_the_fit_owns_its_arrays():
+    theta = _smooth_ramp()
+    kin = kinematics(theta, FS, 5)
+    torque = K * theta + B * kin[1] + INERTIA * kin[2]
+    fit = fit_impedance(kin, torque, lengths=[100, 75], inertia=[INERTIA, INERTIA])
+    assert fit.inertia.flags.writeable and fit.inertia.shape == (2,)
+    assert fit.stiffness == pytest.approx([K, K], rel=1e-6)
+    with pytest.raises(ParameterError, match=r"inertia: expected the fields' shape \(2,\)"):
+        fit_impedance(kin, torque, lengths=[100, 75], inertia=[0.1, 0.2, 0.3])

@@ -394,6 +394,8 @@ def test_results_document_has_exactly_the_contract_keys(analysed):
     read = WalkingResults.from_dict(older)
     assert again.settings.inertia_model == "session"
     assert read.settings.inertia_model == "point"  # what the analysis did before the setting
+    del older["settings"]
+    assert WalkingResults.from_dict(older).settings.inertia_model == "point"
     (first, *_) = read.timing_points
     assert first.stiffness_change_verdict is None and first.stiffness_change_in_window is None
     assert np.isnan(first.stiffness_change_probability)
@@ -1236,3 +1238,104 @@ def test_one_inertia_for_the_session_is_closer_to_the_truth_and_steadies_the_sti
             assert len({tp.inertia.mean for tp in points}) == len(points)
     assert errors["session"][0] < 0.8 * errors["point"][0]
     assert errors["session"][1] < 0.5 * errors["point"][1]
+
+
+def _responses(k, b, inertia, n_trials, rng, noise=0.05):
+    """Synthetic responses of one condition: ``n_trials`` perturbed trials of ``T = I θ'' + b θ'
+    + k θ`` with torque noise (N·m), 30 unperturbed departures of noise alone."""
+    from anklelab.pipelines.walking.responses import RESPONSE, Responses
+    from anklelab.signals import Trials
+
+    angle, vel, acc = (x[:130] for x in _perturbation(0.035, n=200))
+    t = np.arange(angle.size) / FS
+    clean = np.stack([angle, vel, acc, k * angle + b * vel + inertia * acc, t * angle])
+    data = np.repeat(clean[None], n_trials, axis=0)
+    data[:, 3] += noise * rng.standard_normal((n_trials, angle.size))
+    baseline = np.zeros((30, 5, angle.size))
+    baseline[:, 3] = noise * rng.standard_normal((30, angle.size))
+    baseline -= baseline.mean(axis=0)
+    metadata = {
+        "trial": np.arange(n_trials).astype(str),
+        "onset_ms": np.full(n_trials, 100.0),
+        "offset": np.full(n_trials, 100),
+    }
+    return Responses(
+        perturbed=Trials(data, FS, RESPONSE, metadata),
+        unperturbed=baseline,
+        nominal_dx=np.full(angle.size, 0.06),
+        twist_torque=np.zeros(angle.size),
+        explained=0.0,
+        dropped={},
+    )
+
+
+def test_the_session_inertia_leaves_out_single_trials_weighs_by_trials_and_widens_the_resamples():
+    """The joint inertia is each condition's share weighted by its trials; a condition of one
+    trial (its resamples cannot spread) takes no part, however wild; with no condition of two
+    trials there is a value but no interval; one condition alone gives its own fit. (Fails
+    unweighted, or with the single trial pooled.)"""
+    from anklelab.ident import inertia_terms
+    from anklelab.pipelines.walking.impedance import estimate_timing_points
+
+    rng = np.random.default_rng(4)
+    settings = WalkingSettings(stiffness_model="linear", interval_reps=40, bootstrap_reps=5)
+    counts = {"dorsi/100": 3, "dorsi/225": 12, "plantar/100": 6, "plantar/225": 1}
+    stiff = {"dorsi/100": 900.0, "dorsi/225": 1200.0, "plantar/100": 1000.0, "plantar/225": 800.0}
+    responses = {
+        key: _responses(stiff[key], 3.0, 5.0 if n == 1 else INERTIA, n, rng)  # a wild single
+        for key, n in counts.items()
+    }
+    points = estimate_timing_points(responses, 30, settings, 0)
+    assert len({(tp.inertia.mean, tp.inertia.ci95) for tp in points}) == 1
+    shares = {
+        key: inertia_terms(
+            *(r.perturbed.average()[None, :3, :100], r.perturbed.average()[None, 3, :100]),
+            stiffness_model="linear",
+            fs=FS,
+            time_angle=r.perturbed.average()[None, 4, :100],
+        )
+        for key, r in responses.items()
+    }
+    kept = [key for key, n in counts.items() if n >= 2]
+    weighted = sum(counts[k] * shares[k].numerator for k in kept)
+    expected = weighted / sum(counts[k] * shares[k].denominator for k in kept)
+    assert points[0].inertia.mean == pytest.approx(float(expected[0]), rel=1e-9)
+    assert points[0].inertia.mean == pytest.approx(INERTIA, rel=0.05)
+    low, high = points[0].inertia.ci95
+    assert low < INERTIA < high
+    # no condition of two trials: a value, no interval (as a single trial's own estimates)
+    single = {key: _responses(stiff[key], 3.0, INERTIA, 1, rng) for key in counts}
+    alone = estimate_timing_points(single, 30, settings, 0)
+    assert all(np.isfinite(tp.inertia.mean) and np.isnan(tp.inertia.ci95).all() for tp in alone)
+    # one condition: the session's fit is the point's own
+    one = {"dorsi/225": responses["dorsi/225"]}
+    own = estimate_timing_points(one, 30, settings.model_copy(update={"inertia_model": "point"}), 0)
+    joint = estimate_timing_points(one, 30, settings, 0)
+    for name in ("stiffness", "damping", "inertia"):
+        assert getattr(joint[0], name).mean == pytest.approx(getattr(own[0], name).mean, rel=1e-9)
+
+
+def test_the_session_inertias_resamples_are_widened_by_each_conditions_trials():
+    """A resample of n trials underestimates the spread of their mean by (n - 1) / n in
+    variance: each condition's resamples are widened by sqrt(n / (n - 1)) before the pooling,
+    so with two trials everywhere the joint inertia's resamples spread sqrt(2) times wider."""
+    from anklelab._student_t import t_quantile
+    from anklelab.pipelines.walking.impedance import _Condition, _SharedInertia, _stacked
+
+    rng = np.random.default_rng(5)
+    settings = WalkingSettings(stiffness_model="linear", interval_reps=60, bootstrap_reps=5)
+    conditions = [
+        _Condition(key, r, _stacked(r, settings, rng))
+        for key, r in (
+            (f"dorsi/{d}", _responses(k, 3.0, INERTIA, 2, rng, noise=0.5))
+            for d, k in ((100, 900.0), (225, 1200.0))
+        )
+    ]
+    options = ("linear", [100], FS, 0, 0.0)
+    widened = _SharedInertia.fit(conditions, *options, settings.interval_reps)
+    plain = _SharedInertia.fit(conditions, *options, 0)  # no resample widened
+    reps = slice(1, 1 + settings.interval_reps)
+    assert widened.rows[0] == plain.rows[0]
+    ratio = np.std(widened.rows[reps] - widened.rows[0]) / np.std(plain.rows[reps] - plain.rows[0])
+    assert ratio == pytest.approx(np.sqrt(2.0), rel=0.02)
+    assert widened.scale == pytest.approx(t_quantile(2, 0.975))  # 4 trials, 2 conditions

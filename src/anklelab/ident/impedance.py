@@ -157,9 +157,11 @@ def fit_impedance(
         unfiltered angle, rad, low-passed as the torque and ``θ`` were (see the module
         docstring). Omitted: ``t θ`` from the ``θ`` given, right for unfiltered data.
     inertia : array_like, optional
-        A known inertia, kg·m², shaped like the fields (or broadcastable to them): only the
-        stiffness and damping are fitted, to ``T - I θ''``, and the fit's ``inertia`` is this
-        one (for an inertia shared by several records, see :func:`inertia_terms`).
+        A known inertia, kg·m², shaped like the fields or broadcastable to them (one value per
+        window and record: ``(n_windows, ...)``; a value per window alone is
+        ``(n_windows, 1, ...)`` with leading axes): only the stiffness, damping and slope are
+        fitted, to ``T - I θ''``, and the fit's ``inertia`` is this one (for an inertia shared
+        by several records, see :func:`inertia_terms`).
 
     Returns
     -------
@@ -215,7 +217,7 @@ def fit_impedance(
         # (k - k1 t_c) θ + k1 t θ: the θ coefficient is moved to t_c = Σ t θ² / Σ θ²
         slope = coef[..., 3]
         stiffness = stiffness + slope * terms.centre
-    fitted_inertia = coef[..., _INERTIA] if inertia is None else given  # given: returned as is
+    fitted_inertia = coef[..., _INERTIA] if inertia is None else np.array(given)  # as given
     fields = (stiffness, coef[..., 1], fitted_inertia, vaf_percent, slope)
     return ImpedanceFit(*(terms.to_fields(f) for f in fields))
 
@@ -351,9 +353,15 @@ class _NormalTerms(NamedTuple):
     def from_fields(self, values: NDArray[np.float64]) -> NDArray[np.float64]:
         """Field-shaped values (or values that broadcast to the fields) as ``(..., n_windows)``."""
         leading = self.sum_t.shape  # (..., n_windows)
-        if self.single:
-            return np.broadcast_to(np.asarray(values)[..., None], leading)
-        return np.moveaxis(np.broadcast_to(values, (leading[-1], *leading[:-1])), 0, -1)
+        fields = leading[:-1] if self.single else (leading[-1], *leading[:-1])
+        try:
+            shaped = np.broadcast_to(values, fields)
+        except ValueError:
+            raise ParameterError(
+                f"inertia: expected the fields' shape {fields} or one that broadcasts to it, got "
+                f"{np.shape(values)}"
+            ) from None
+        return shaped[..., None] if self.single else np.moveaxis(shaped, 0, -1)
 
 
 def impedance_torque(

@@ -18,7 +18,8 @@ The steps follow paper 000 (sections 2.2, 2.3, 2.4.2, 3) and DESIGN.md section 5
    group's median (a glitch) are dropped with a reason.
 4. **Model** (:mod:`.impedance`): ``T = I θ'' + b θ' + k(t) θ`` fitted to the all-trial average
    with a constant and a linearly changing stiffness, the model chosen per point
-   (``stiffness_model = "auto"``); 95 % intervals from resampling the trials, widened by what
+   (``stiffness_model = "auto"``), around one inertia fitted jointly over the session
+   (``inertia_model = "session"``); 95 % intervals from resampling the trials, widened by what
    the data cannot pin down; paper 000's subset sd beside them; ``cop_m`` is the θ²-weighted
    nominal lever arm; plausibility checks (:mod:`.checks`).
 5. **Bench**: stiffness per actuator distance and the walking-vs-bench error at ``cop_m``.

@@ -1,4 +1,4 @@
-"""Impedance of one timing point and direction, with honest 95 % intervals.
+"""Impedance of every timing point and direction, with honest 95 % intervals.
 
 From the condition's adjusted responses (:mod:`.responses`), ``T = I θ'' + b θ' + k(t) θ`` is
 fitted to the average over all perturbed trials, with a constant stiffness and with one that
@@ -174,15 +174,15 @@ class _Condition:
 
 @dataclass(frozen=True)
 class _SharedInertia:
-    """The session's one inertia (kg·m²), fitted jointly over every condition, each with its own
+    """The session's one inertia (kg·m²), fitted jointly over the conditions, each with its own
     stiffness and damping: for each stacked average (``rows``), for the all-trial averages over
     each sensitivity window (``windows``) and under each of :meth:`_Condition.variants`
-    (``variants``); ``n_trials``, the perturbed trials behind it."""
+    (``variants``); ``scale``, the factor of its resamples' sd in its interval (NaN: none)."""
 
     rows: NDArray[np.float64]
     windows: NDArray[np.float64]
     variants: NDArray[np.float64]
-    n_trials: int
+    scale: float
 
     @classmethod
     def fit(
@@ -193,9 +193,26 @@ class _SharedInertia:
         fs: float,
         shift: int,
         lag: float,
+        reps: int,
     ) -> _SharedInertia:
-        """Sum each condition's share (:func:`~anklelab.ident.inertia_terms`) with ``model``."""
+        """Sum the conditions' shares (:func:`~anklelab.ident.inertia_terms`, with ``model``),
+        each weighted by its perturbed trials (its average's noise falls as 1 / n).
+
+        Only conditions of two trials or more, with finite averages, take part: a single
+        trial's resamples do not spread at all, and one bad condition must not spoil every
+        point. Each one's ``reps`` interval resamples are widened about its all-trial average by
+        ``sqrt(n / (n - 1))`` before the pooling (a resample of ``n`` trials underestimates the
+        spread of their mean by ``(n - 1) / n`` in variance, see :func:`_estimate`), and the
+        interval takes Student's t with the trials less the conditions as degrees of freedom.
+        With no such condition the inertia comes from all of them, without an interval.
+        """
         n = lengths[0]
+        counts = [len(c.responses.perturbed) for c in conditions]
+        members = [
+            (c, k) for c, k in zip(conditions, counts, strict=True)
+            if k >= 2 and np.isfinite(c.averages).all()
+        ]  # fmt: skip
+        pooled = members or list(zip(conditions, counts, strict=True))
 
         def shared(stacks: list[NDArray[np.float64]], windows: list[int] | None = None) -> NDArray:
             terms = [
@@ -209,15 +226,25 @@ class _SharedInertia:
                 )
                 for stack in stacks
             ]
-            numerator = np.sum([t.numerator for t in terms], axis=0)
-            return numerator / np.sum([t.denominator for t in terms], axis=0)
+            weights = [k for _, k in pooled]
+            numerator = sum(w * t.numerator for w, t in zip(weights, terms, strict=True))
+            denominator = sum(w * t.denominator for w, t in zip(weights, terms, strict=True))
+            return np.asarray(numerator / denominator)
 
-        fulls = [c.averages[_FULL : _FULL + 1] for c in conditions]
+        def widened(condition: _Condition, k: int) -> NDArray[np.float64]:
+            stack = condition.averages[..., :n].copy()
+            if k >= 2:
+                resamples = stack[1 : 1 + reps]
+                resamples += (resamples - stack[_FULL]) * (np.sqrt(k / (k - 1)) - 1)
+            return stack
+
+        fulls = [c.averages[_FULL : _FULL + 1] for c, _ in pooled]
+        dof = sum(k for _, k in members) - len(members)
         return cls(
-            rows=shared([c.averages[..., :n] for c in conditions]),
+            rows=shared([widened(c, k) for c, k in pooled]),
             windows=shared(fulls, lengths[1:])[:, 0] if len(lengths) > 1 else np.zeros(0),
-            variants=shared([c.variants(n, shift, lag, fs)[0] for c in conditions]),
-            n_trials=sum(len(c.responses.perturbed) for c in conditions),
+            variants=shared([c.variants(n, shift, lag, fs)[0] for c, _ in pooled]),
+            scale=t_quantile(dof, 0.975) if members and dof >= 1 else np.nan,
         )
 
 
@@ -267,28 +294,35 @@ def _systematic(
     return moves
 
 
+def _interval_scale(n_trials: int) -> float:
+    """The factor of the resamples' sd in an interval over ``n_trials`` perturbed trials:
+    ``t(n-1, 0.975) × sqrt(n / (n-1))`` (NaN below two trials). A resample of few trials
+    underestimates the spread of their mean (by ``(n-1)/n`` in variance), and the tails are
+    Student's, not normal (1.58× the normal interval for 5 trials, 1.04× for 50)."""
+    if n_trials < 2:
+        return np.nan
+    return t_quantile(n_trials - 1, 0.975) * float(np.sqrt(n_trials / (n_trials - 1)))
+
+
 def _estimate(
     values: NDArray[np.float64],
     n_reps: int,
     paper: slice,
-    n_trials: int,
+    scale: float,
     systematic: float = 0.0,
     bias_unknown: bool = False,
 ) -> Estimate:
     """An :class:`Estimate` from stacked values: all-trial, ``n_reps`` resamples, paper subsets.
 
-    The interval is the all-trial value ± ``t(n-1, 0.975) × sqrt(n / (n-1)) × s``, ``s`` the
-    resamples' sd and ``n`` the perturbed trials: a resample of few trials underestimates the
-    spread of their mean (by ``(n-1)/n`` in variance) and the tails are Student's, not normal
-    (1.58× the normal interval for 5 trials, 1.04× for 50). An sd settles with far fewer
-    resamples than the 2.5 and 97.5 percentiles do. A ``systematic`` half-width (what the data
-    cannot pin down, :func:`_systematic`) is added in quadrature; a bias that nothing bounds
-    is flagged (``bias_unknown``).
+    The interval is the all-trial value ± ``scale × s`` (:func:`_interval_scale`), ``s`` the
+    resamples' sd; an sd settles with far fewer resamples than the 2.5 and 97.5 percentiles do.
+    A ``systematic`` half-width (what the data cannot pin down, :func:`_systematic`) is added in
+    quadrature; a bias that nothing bounds is flagged (``bias_unknown``). No interval with a NaN
+    ``scale`` or fewer than two resamples.
     """
     centre, resampled, subsets = float(values[_FULL]), values[1 : 1 + n_reps], values[paper]
     interval = (np.nan, np.nan)
-    if n_reps >= 2 and n_trials >= 2:
-        scale = t_quantile(n_trials - 1, 0.975) * np.sqrt(n_trials / (n_trials - 1))
+    if n_reps >= 2 and np.isfinite(scale):
         half = float(np.hypot(scale * sd(resampled), systematic))
         interval = (centre - half, centre + half)
     return Estimate(centre, sd(subsets), interval, subsets, bias_unknown=bias_unknown)
@@ -331,9 +365,12 @@ def estimate_timing_points(
     shared = None
     if settings.inertia_model == "session":
         model = _rest_model(settings)
-        shared = _SharedInertia.fit(conditions, model, lengths, fs, shift, lag)
+        reps = settings.interval_reps
+        shared = _SharedInertia.fit(conditions, model, lengths, fs, shift, lag, reps)
     return [
-        _timing_point(condition, n_unperturbed, settings, shared, bias_unknown)
+        _timing_point(
+            condition, n_unperturbed, settings, (lengths, shift, lag), shared, bias_unknown
+        )
         for condition in conditions
     ]
 
@@ -368,16 +405,18 @@ def _timing_point(
     condition: _Condition,
     n_unperturbed: int,
     settings: WalkingSettings,
+    samples_of: tuple[list[int], int, float],
     shared: _SharedInertia | None,
     bias_unknown: bool,
 ) -> TimingPoint:
     """One condition's :class:`TimingPoint` (arguments as :func:`estimate_timing_points`;
+    ``samples_of``: the windows' lengths, the timing shift and the coupler's lag in samples;
     ``shared``: the session's inertia, or None for the point's own)."""
     key, responses, averages = condition.key, condition.responses, condition.averages
     trials = responses.perturbed
     fs = trials.fs
     windows = settings.windows_ms()
-    lengths = [samples(w, fs) for w in windows]
+    lengths, shift, lag = samples_of
     n = lengths[0]
     reps = settings.interval_reps
     paper = slice(1 + reps, None)
@@ -386,16 +425,15 @@ def _timing_point(
     constant = _fit(main, [n], "constant", fs, rows)
     linear = _fit(main, [n], "linear", fs, rows)
     model: StiffnessModel = (
-        _focused_choice(constant.stiffness[0], linear.stiffness[0])
+        _focused_choice(constant.stiffness[0][: 1 + reps], linear.stiffness[0][: 1 + reps])
         if settings.stiffness_model == "auto"
         else settings.stiffness_model
     )
     window_s = n / fs
     change = linear.stiffness_slope[0] * window_s / linear.stiffness[0]
-    change_estimate = _estimate(change, reps, paper, len(trials), bias_unknown=bias_unknown)
+    scale = _interval_scale(len(trials))
+    change_estimate = _estimate(change, reps, paper, scale, bias_unknown=bias_unknown)
     full = averages[_FULL : _FULL + 1]
-    shift = round(settings.timing_uncertainty_ms * fs / 1000.0)
-    lag = settings.coupler_lag_ms * fs / 1000.0
     rest = _rest_model(settings)
     source: dict[str, StiffnessModel] = {
         "stiffness": model,
@@ -418,15 +456,15 @@ def _timing_point(
         }
         variant_fits = _fit(variants, None, name, fs, at_variants)
         systematic |= _systematic(variant_fits, timing, centre, windows_fit)
-    behind = {q: len(trials) for q in source}  # the trials each quantity rests on
-    if shared is not None:
-        behind["inertia"] = shared.n_trials
+    scales = {q: scale for q in source}
+    if shared is not None:  # the session's trials behind it
+        scales["inertia"] = shared.scale
     estimates = {
         q: _estimate(
             getattr(fitted[name], q)[0],
             reps,
             paper,
-            behind[q],
+            scales[q],
             systematic.get(q, 0.0),
             bias_unknown and q in _SYSTEMATIC,
         )
@@ -453,9 +491,7 @@ def _timing_point(
         stiffness_change_probability=probability,
         stiffness_change_verdict=verdict,
         stiffness_slope=(
-            _estimate(
-                linear.stiffness_slope[0], reps, paper, len(trials), bias_unknown=bias_unknown
-            )
+            _estimate(linear.stiffness_slope[0], reps, paper, scale, bias_unknown=bias_unknown)
             if model == "linear"
             else None
         ),

@@ -400,8 +400,7 @@ class WalkingResults:
                 for k, v in document.get("settings", {}).items()
                 if k in WalkingSettings.model_fields
             }
-            if "settings" in document:  # written before the setting: each point's own inertia
-                settings.setdefault("inertia_model", "point")
+            settings.setdefault("inertia_model", "point")  # written before the setting existed
             return cls(
                 settings=WalkingSettings.model_validate(settings, strict=False),
                 platform_filters=dict(document.get("platform_filters", {})),

@@ -102,8 +102,10 @@ class WalkingSettings(Parameters):
         ``"session"`` (default): one inertia for every timing point and direction of the
         session (the foot and what moves with it do not change between them), fitted jointly
         with each point's own stiffness and damping (see
-        :mod:`anklelab.pipelines.walking.impedance`); ``"point"``: each point's own, as paper
-        000 fits it.
+        :mod:`anklelab.pipelines.walking.impedance`), from the model damping and inertia come
+        from (with ``stiffness_model = "auto"`` the linear one: the constant model's stiffness
+        is then fitted around that inertia too); ``"point"``: each point's own, as paper 000
+        fits it.
     covariate_adjustment, adjustment_span_ms, adjustment_guard_ms, adjustment_bins
         Remove each trial's own gait variation, predicted from its raw signals over the
         ``adjustment_span_ms`` before its onset (ending ``adjustment_guard_ms`` before it, in
