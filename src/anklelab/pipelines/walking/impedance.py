@@ -33,13 +33,15 @@ and only less precise, which their intervals show.
 it weigh the same at every timing point, and over a 100 ms window ``I θ''`` and ``k θ`` are
 hard to tell apart: each point's own inertia takes up part of the acceleration's noise and
 hands the stiffness the opposite part. The inertia is therefore the least-squares inertia of
-one joint fit over every condition, each with its own stiffness, damping (and slope), taken
-from the model damping and inertia come from (:func:`~anklelab.ident.inertia_terms`, summed
-over the conditions), and each condition is fitted around it. Each resample (the conditions
-resampled independently), each sensitivity window and each systematic variant gets its own
-joint inertia. On the clean-room generator this lowered every kind's stiffness maximum (4.29 to
-4.19 % on the stiff prosthetic kind, 3.77 to 3.26 % on the human-like one, 5.06 to 4.28 % on the
-random one) and its inertia errors. ``"point"`` keeps paper 000's fit per point.
+one joint fit over the conditions, each with its own stiffness, damping (and slope), taken
+from the model damping and inertia come from and weighted by its trials
+(:func:`~anklelab.ident.inertia_terms`, summed over the conditions of two trials or more:
+:class:`_SharedInertia`), and each condition is fitted around it. Each resample (the
+conditions resampled independently), each sensitivity window and each systematic variant gets
+its own joint inertia. The conditions' resamples are drawn independently also of the
+unperturbed trials they share, which overstates those trials' part of the joint inertia's
+spread a little (on one twin session its sd was 0.0125 against 0.0115 kg·m² with one shared
+draw). ``"point"`` keeps paper 000's fit per point. How it does: docs/guide/walking-analysis.md.
 
 **The change within the window.** The linear model is always fitted; ``k₁ W / k`` is the
 change of the stiffness over the window ``W`` as a fraction of it, with its interval, and the
