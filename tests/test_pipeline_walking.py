@@ -1170,9 +1170,7 @@ def test_a_delayed_twist_correction_widens_the_damping_by_its_lag(lag):
     """A coupler of damping c twists behind T / K by c / K: delaying a correction ``a θ`` by
     ``τ`` adds ``a τ θ'``, so the damping's interval grows by ``a τ``; the correction's own
     size (``a``) stays in the stiffness's."""
-    from types import SimpleNamespace
-
-    from anklelab.pipelines.walking.impedance import _Condition, _fit, _systematic
+    from anklelab.pipelines.walking.impedance import _fit, _systematic, _variants
 
     angle, vel, acc = _perturbation(0.05, n=200)
     t = np.arange(angle.size) / FS
@@ -1182,8 +1180,7 @@ def test_a_delayed_twist_correction_widens_the_damping_by_its_lag(lag):
     quantities = ("stiffness", "damping", "inertia")
     centre = {q: float(np.ravel(getattr(fitted, q))[0]) for q in quantities}
     a = 500.0  # N·m/rad: the twist correction's part of the torque response
-    condition = _Condition("dorsi/100", SimpleNamespace(twist_torque=a * angle), full)
-    variants, timing = condition.variants(angle.size, 0, lag, FS)
+    variants, timing = _variants(full[0], a * angle, angle.size, 0, lag, FS)
     moves = _systematic(_fit(variants, None, "constant", FS), timing, centre, None)
     assert centre["stiffness"] == pytest.approx(K, rel=1e-6)
     assert moves["stiffness"] == pytest.approx(a, rel=0.01)
@@ -1320,18 +1317,22 @@ def test_the_session_inertias_resamples_are_widened_by_each_conditions_trials():
     variance: each condition's resamples are widened by sqrt(n / (n - 1)) before the pooling,
     so with two trials everywhere the joint inertia's resamples spread sqrt(2) times wider."""
     from anklelab._student_t import t_quantile
-    from anklelab.pipelines.walking.impedance import _Condition, _SharedInertia, _stacked
+    from anklelab.pipelines.walking.impedance import (
+        _Condition,
+        _SharedInertia,
+        _stacked,
+        _variants,
+    )
 
     rng = np.random.default_rng(5)
     settings = WalkingSettings(stiffness_model="linear", interval_reps=60, bootstrap_reps=5)
-    conditions = [
-        _Condition(key, r, _stacked(r, settings, rng))
-        for key, r in (
-            (f"dorsi/{d}", _responses(k, 3.0, INERTIA, 2, rng, noise=0.5))
-            for d, k in ((100, 900.0), (225, 1200.0))
-        )
-    ]
-    options = ("linear", [100], FS, 0, 0.0)
+    conditions = []
+    for d, k in ((100, 900.0), (225, 1200.0)):
+        r = _responses(k, 3.0, INERTIA, 2, rng, noise=0.5)
+        averages = _stacked(r, settings, rng)
+        variants = _variants(averages[0], r.twist_torque, 100, 0, 0.0, FS)
+        conditions.append(_Condition(f"dorsi/{d}", r, averages, *variants))
+    options = ("linear", [100], FS)
     widened = _SharedInertia.fit(conditions, *options, settings.interval_reps)
     plain = _SharedInertia.fit(conditions, *options, 0)  # no resample widened
     reps = slice(1, 1 + settings.interval_reps)

@@ -141,45 +141,52 @@ def _focused_choice(constant: NDArray[np.float64], linear: NDArray[np.float64]) 
 
 @dataclass(frozen=True)
 class _Condition:
-    """One condition's responses and their stacked averages: over all perturbed trials
-    (:data:`_FULL`), then ``interval_reps`` resamples, then paper 000's subsets."""
+    """One condition's responses, their stacked averages (over all perturbed trials
+    (:data:`_FULL`), then ``interval_reps`` resamples, then paper 000's subsets) and the
+    all-trial average's ``variants`` behind the systematic half-width (:func:`_variants`;
+    the first ``timing`` of them shift the timing)."""
 
     key: str
     responses: Responses
     averages: NDArray[np.float64]
+    variants: NDArray[np.float64]
+    timing: int
 
-    def variants(self, n: int, shift: int, lag: float, fs: float) -> tuple[NDArray, int]:
-        """The all-trial average over the first ``n`` samples under what the data cannot pin
-        down (see :func:`_systematic`), stacked: the torque ``shift`` samples later and earlier
-        than the kinematics (when the average is long enough), without the coupler's twist
-        correction, and with it taken ``lag`` samples earlier and later. Also returns how many
-        come first for the timing (0 or 2)."""
-        full, twist = self.averages[_FULL], self.responses.twist_torque
-        out = []
-        if shift and full.shape[-1] >= n + shift:
-            for lead in (shift, -shift):  # torque later / earlier than the kinematics
-                k0, t0 = (0, lead) if lead > 0 else (-lead, 0)
-                shifted = full[:, k0 : k0 + n].copy()
-                shifted[_TORQUE] = full[_TORQUE, t0 : t0 + n]
-                shifted[_TIME_ANGLE] -= k0 / fs * shifted[_KIN[0]]  # time from the window start
-                out.append(shifted)
-        timing = len(out)
-        untwisted = full[:, :n].copy()
-        untwisted[_TORQUE] += twist[:n]
-        out.append(untwisted)
-        for early in (lag, -lag):  # the correction taken `lag` samples earlier and later
-            moved = full[:, :n].copy()
-            moved[_TORQUE] += (twist - advance(twist, early))[:n]
-            out.append(moved)
-        return np.stack(out), timing
+
+def _variants(
+    full: NDArray[np.float64], twist: NDArray[np.float64], n: int, shift: int, lag: float, fs: float
+) -> tuple[NDArray[np.float64], int]:
+    """The all-trial average ``full`` (channels :data:`RESPONSE`) over the first ``n`` samples
+    under what the data cannot pin down (see :func:`_systematic`), stacked: the torque ``shift``
+    samples later and earlier than the kinematics (when the average is long enough), without
+    the coupler's twist correction (``twist``, :class:`~.responses.Responses`), and with it
+    taken ``lag`` samples earlier and later. Also returns how many come first for the timing
+    (0 or 2)."""
+    out = []
+    if shift and full.shape[-1] >= n + shift:
+        for lead in (shift, -shift):  # torque later / earlier than the kinematics
+            k0, t0 = (0, lead) if lead > 0 else (-lead, 0)
+            shifted = full[:, k0 : k0 + n].copy()
+            shifted[_TORQUE] = full[_TORQUE, t0 : t0 + n]
+            shifted[_TIME_ANGLE] -= k0 / fs * shifted[_KIN[0]]  # time from the window start
+            out.append(shifted)
+    timing = len(out)
+    untwisted = full[:, :n].copy()
+    untwisted[_TORQUE] += twist[:n]
+    out.append(untwisted)
+    for early in (lag, -lag):  # the correction taken `lag` samples earlier and later
+        moved = full[:, :n].copy()
+        moved[_TORQUE] += (twist - advance(twist, early))[:n]
+        out.append(moved)
+    return np.stack(out), timing
 
 
 @dataclass(frozen=True)
 class _SharedInertia:
     """The session's one inertia (kg·m²), fitted jointly over the conditions, each with its own
     stiffness and damping: for each stacked average (``rows``), for the all-trial averages over
-    each sensitivity window (``windows``) and under each of :meth:`_Condition.variants`
-    (``variants``); ``scale``, the factor of its resamples' sd in its interval (NaN: none)."""
+    each sensitivity window (``windows``) and under each of the conditions' ``variants``;
+    ``scale``, the factor of its resamples' sd in its interval (NaN: none)."""
 
     rows: NDArray[np.float64]
     windows: NDArray[np.float64]
@@ -193,8 +200,6 @@ class _SharedInertia:
         model: StiffnessModel,
         lengths: list[int],
         fs: float,
-        shift: int,
-        lag: float,
         reps: int,
     ) -> _SharedInertia:
         """Sum the conditions' shares (:func:`~anklelab.ident.inertia_terms`, with ``model``),
@@ -245,7 +250,7 @@ class _SharedInertia:
         return cls(
             rows=shared([widened(c, k) for c, k in pooled]),
             windows=shared(fulls, lengths[1:])[:, 0] if len(lengths) > 1 else np.zeros(0),
-            variants=shared([c.variants(n, shift, lag, fs)[0] for c, _ in pooled]),
+            variants=shared([c.variants for c, _ in pooled]),
             scale=t_quantile(dof, 0.975) if members and dof >= 1 else np.nan,
         )
 
@@ -255,7 +260,7 @@ def _systematic(
 ) -> dict[str, float]:
     """How far each all-trial estimate (``centre``) moves under what the data cannot pin down.
 
-    ``variants`` is the fit of :meth:`_Condition.variants` (``timing`` timing variants first).
+    ``variants`` is the fit of :func:`_variants` (``timing`` timing variants first).
     Three independent sources, added in quadrature:
 
     - *Timing and window*: the largest move when the torque of the all-trial average is
@@ -356,23 +361,24 @@ def estimate_timing_points(
         it, :func:`~.calibration.uncorrected_moment`): the impedance, its slope and its change
         are flagged (poorly determined), before the change is judged.
     """
-    rng = np.random.default_rng(seed)
-    conditions = [_Condition(key, r, _stacked(r, settings, rng)) for key, r in responses.items()]
-    if not conditions:
+    if not responses:
         return []
-    fs = conditions[0].responses.perturbed.fs
+    rng = np.random.default_rng(seed)
+    fs = next(iter(responses.values())).perturbed.fs
     lengths = [samples(w, fs) for w in settings.windows_ms()]
     shift = round(settings.timing_uncertainty_ms * fs / 1000.0)
     lag = settings.coupler_lag_ms * fs / 1000.0
+    conditions = []
+    for key, condition in responses.items():
+        averages = _stacked(condition, settings, rng)
+        variants = _variants(averages[_FULL], condition.twist_torque, lengths[0], shift, lag, fs)
+        conditions.append(_Condition(key, condition, averages, *variants))
     shared = None
     if settings.inertia_model == "session":
         model = _rest_model(settings)
-        reps = settings.interval_reps
-        shared = _SharedInertia.fit(conditions, model, lengths, fs, shift, lag, reps)
+        shared = _SharedInertia.fit(conditions, model, lengths, fs, settings.interval_reps)
     return [
-        _timing_point(
-            condition, n_unperturbed, settings, (lengths, shift, lag), shared, bias_unknown
-        )
+        _timing_point(condition, n_unperturbed, settings, lengths, shared, bias_unknown)
         for condition in conditions
     ]
 
@@ -407,18 +413,17 @@ def _timing_point(
     condition: _Condition,
     n_unperturbed: int,
     settings: WalkingSettings,
-    samples_of: tuple[list[int], int, float],
+    lengths: list[int],
     shared: _SharedInertia | None,
     bias_unknown: bool,
 ) -> TimingPoint:
     """One condition's :class:`TimingPoint` (arguments as :func:`estimate_timing_points`;
-    ``samples_of``: the windows' lengths, the timing shift and the coupler's lag in samples;
-    ``shared``: the session's inertia, or None for the point's own)."""
+    ``lengths``: the windows' lengths, samples; ``shared``: the session's inertia, or None for
+    the point's own)."""
     key, responses, averages = condition.key, condition.responses, condition.averages
     trials = responses.perturbed
     fs = trials.fs
     windows = settings.windows_ms()
-    lengths, shift, lag = samples_of
     n = lengths[0]
     reps = settings.interval_reps
     paper = slice(1 + reps, None)
@@ -449,15 +454,14 @@ def _timing_point(
         name: _fit(full, lengths[1:], name, fs, at_windows) if len(lengths) > 1 else None
         for name in dict.fromkeys(source.values())
     }
-    variants, timing = condition.variants(n, shift, lag, fs)
     at_variants = None if shared is None else shared.variants
     systematic: dict[str, float] = {}
     for name, windows_fit in window_fits.items():
         centre = {
             q: float(getattr(fitted[name], q)[0][_FULL]) for q in _SYSTEMATIC if source[q] == name
         }
-        variant_fits = _fit(variants, None, name, fs, at_variants)
-        systematic |= _systematic(variant_fits, timing, centre, windows_fit)
+        variant_fits = _fit(condition.variants, None, name, fs, at_variants)
+        systematic |= _systematic(variant_fits, condition.timing, centre, windows_fit)
     scales = {q: scale for q in source}
     if shared is not None:  # the session's trials behind it
         scales["inertia"] = shared.scale
