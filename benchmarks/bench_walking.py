@@ -73,6 +73,7 @@ def _trial(trial, info, settings, filters):
 PAPER_SETTINGS = {
     "stiffness_model": "constant",
     "inertia_model": "point",
+    "angle_gain": "measured",
     "covariate_adjustment": False,
     "outlier_mads": 1e9,
     "interval_reps": 100,
@@ -80,8 +81,9 @@ PAPER_SETTINGS = {
     "force_delay_ms": 0.0,
 }
 """Paper 000's model, which the loop below implements: constant stiffness, each point's own
-inertia, no covariate adjustment, no outlier screen, the motor angle taken as the plate's, the
-plate's channels taken as recorded (paper 000's DAQ has no anti-alias filter to take out)."""
+inertia, the ankle angle as measured, no covariate adjustment, no outlier screen, the motor angle
+taken as the plate's, the plate's channels taken as recorded (paper 000's DAQ has no anti-alias
+filter to take out)."""
 
 
 def per_trial_loop(session, settings):

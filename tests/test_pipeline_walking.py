@@ -378,6 +378,8 @@ def test_results_document_has_exactly_the_contract_keys(analysed):
         "stiffness_change_in_window",
         "window_sensitivity",
         "adjustment_explained",
+        "angle_gain",
+        "angle_gain_pooled",
     }
     assert set(point["stiffness_nm_per_rad"]) == {"mean", "sd", "ci95", "poorly_determined"}
     low, high = point["stiffness_nm_per_rad"]["ci95"]
@@ -389,16 +391,18 @@ def test_results_document_has_exactly_the_contract_keys(analysed):
     older = json.loads(json.dumps(doc))
     for node in older["timing_points"]:
         del node["stiffness_change_verdict"], node["stiffness_change_probability"]
-        del node["stiffness_change_in_window"]
-    del older["settings"]["inertia_model"]
+        del node["stiffness_change_in_window"], node["angle_gain"], node["angle_gain_pooled"]
+    del older["settings"]["inertia_model"], older["settings"]["angle_gain"]
     read = WalkingResults.from_dict(older)
-    assert again.settings.inertia_model == "session"
-    assert read.settings.inertia_model == "point"  # what the analysis did before the setting
+    assert (again.settings.inertia_model, again.settings.angle_gain) == ("session", "pooled")
+    # what the analysis did before the settings
+    assert (read.settings.inertia_model, read.settings.angle_gain) == ("point", "measured")
     del older["settings"]
     assert WalkingResults.from_dict(older).settings.inertia_model == "point"
     (first, *_) = read.timing_points
     assert first.stiffness_change_verdict is None and first.stiffness_change_in_window is None
     assert np.isnan(first.stiffness_change_probability)
+    assert np.isnan(first.angle_gain) and np.isnan(first.angle_gain_pooled)
     assert set(point["window_sensitivity"]["75"]) == {"stiffness_nm_per_rad"}
     assert [b["distance_m"] for b in doc["bench"]] == [0.06, 0.085, 0.11]
     assert set(doc["bench"][0]) == {"distance_m", "stiffness_nm_per_rad", "r2", "n_tests"}
@@ -1057,8 +1061,11 @@ def test_no_change_is_asserted_where_the_stiffness_is_poorly_determined():
 
     session = simulate_perturberator(trials_per_point=8, n_unperturbed=16, n_calibration=2, seed=5)
     # the window's own change (the neighbours' is precise enough never to reach it here), with
-    # each point's own inertia (the session's determines the stiffness well even here)
-    window = WalkingSettings(bootstrap_reps=10, change_basis="window", inertia_model="point")
+    # each point's own inertia and angle gain (the session's determine the stiffness well even
+    # here)
+    window = WalkingSettings(
+        bootstrap_reps=10, change_basis="window", inertia_model="point", angle_gain="measured"
+    )
     result = analyze_walking(session, window)
     points = result.timing_points
     assert any(
@@ -1220,7 +1227,9 @@ def test_one_inertia_for_the_session_is_closer_to_the_truth_and_steadies_the_sti
     ref = session.truth["reference"]
     errors = {}
     for model in ("point", "session"):
-        settings = WalkingSettings(bootstrap_reps=5, interval_reps=40, inertia_model=model)
+        settings = WalkingSettings(  # each angle as measured: the inertia's effect alone
+            bootstrap_reps=5, interval_reps=40, inertia_model=model, angle_gain="measured"
+        )
         points = analyze_walking(session, settings).timing_points
         truth = [ref[tp.direction][f"{tp.delay_ms:g}"] for tp in points]
         pairs = list(zip(points, truth, strict=True))
@@ -1239,16 +1248,17 @@ def test_one_inertia_for_the_session_is_closer_to_the_truth_and_steadies_the_sti
 
 def _responses(k, b, inertia, n_trials, rng, noise=0.05):
     """Synthetic responses of one condition: ``n_trials`` perturbed trials of ``T = I θ'' + b θ'
-    + k θ`` with torque noise (N·m), 30 unperturbed departures of noise alone."""
+    + k θ`` with torque noise (N·m), 30 unperturbed departures of noise alone; the plate turns
+    as the ankle."""
     from anklelab.pipelines.walking.responses import RESPONSE, Responses
     from anklelab.signals import Trials
 
     angle, vel, acc = (x[:130] for x in _perturbation(0.035, n=200))
     t = np.arange(angle.size) / FS
-    clean = np.stack([angle, vel, acc, k * angle + b * vel + inertia * acc, t * angle])
+    clean = np.stack([angle, vel, acc, k * angle + b * vel + inertia * acc, t * angle, angle])
     data = np.repeat(clean[None], n_trials, axis=0)
     data[:, 3] += noise * rng.standard_normal((n_trials, angle.size))
-    baseline = np.zeros((30, 5, angle.size))
+    baseline = np.zeros((30, len(RESPONSE), angle.size))
     baseline[:, 3] = noise * rng.standard_normal((30, angle.size))
     baseline -= baseline.mean(axis=0)
     metadata = {
@@ -1331,7 +1341,7 @@ def test_the_session_inertias_resamples_are_widened_by_each_conditions_trials():
         r = _responses(k, 3.0, INERTIA, 2, rng, noise=0.5)
         averages = _stacked(r, settings, rng)
         variants = _variants(averages[0], r.twist_torque, 100, 0, 0.0, FS)
-        conditions.append(_Condition(f"dorsi/{d}", r, averages, *variants))
+        conditions.append(_Condition(f"dorsi/{d}", r, averages, (1.0, 1.0), *variants))
     options = ("linear", [100], FS)
     widened = _SharedInertia.fit(conditions, *options, settings.interval_reps)
     plain = _SharedInertia.fit(conditions, *options, 0)  # no resample widened

@@ -156,6 +156,8 @@ def session_rows(
             "change_flagged": int(bool(tp.get("stiffness_changes", tp.get("warnings")))),
             **_change(tp),
             "adjustment_explained": tp.get("adjustment_explained", ""),
+            "angle_gain": tp.get("angle_gain", ""),
+            "angle_gain_pooled": tp.get("angle_gain_pooled", ""),
             "generate_s": t1 - t0,
             "analyse_s": t2 - t1,
         }

@@ -43,6 +43,13 @@ unperturbed trials they share, which overstates those trials' part of the joint 
 spread a little (on one twin session its sd was 0.0125 against 0.0115 kg·m² with one shared
 draw). ``"point"`` keeps paper 000's fit per point. How it does: docs/guide/walking-analysis.md.
 
+**The angle's gain** (``angle_gain = "pooled"``). Each condition's angle is scaled to the gain
+against the plate's rotation that the conditions share, as far as their gains differ by no
+more than their noise explains (:mod:`.gain`): an electrogoniometer's gain changes from step to
+step, and a condition's average keeps a few tenths of a percent of it, which the plate's
+rotation, read by the encoder, does not have. Each resample and subset is scaled with its own
+gain, before anything is fitted.
+
 **The change within the window.** The linear model is always fitted; ``k₁ W / k`` is the
 change of the stiffness over the window ``W`` as a fraction of it, with its interval, and the
 diagnostic is judged on it (:func:`~.change.judge_change`). The analysis then takes the change
@@ -67,6 +74,7 @@ from anklelab.ident.impedance import (
     inertia_terms,
 )
 from anklelab.pipelines.walking.change import change_warning, judge_change
+from anklelab.pipelines.walking.gain import angle_gains
 from anklelab.pipelines.walking.responses import RESPONSE, Responses
 from anklelab.pipelines.walking.results import Estimate, TimingPoint, sd
 from anklelab.pipelines.walking.settings import WalkingSettings
@@ -80,6 +88,8 @@ KINEMATICS = ("angle", "velocity", "acceleration")
 _KIN = [RESPONSE.index(name) for name in KINEMATICS]
 _TORQUE = RESPONSE.index("torque")
 _TIME_ANGLE = RESPONSE.index("time_angle")
+_ANGLES = [*_KIN, _TIME_ANGLE]  # the channels the angle's gain scales
+_PLATE = RESPONSE.index("plate_angle")
 _FULL = 0  # row of the all-trial average among the stacked averages
 _SYSTEMATIC = ("stiffness", "damping", "inertia")  # quantities whose intervals are widened
 
@@ -93,7 +103,7 @@ def condition_order(stance: Trials) -> list[str]:
 
 def _resampled(responses: Responses, n_reps: int, rng: np.random.Generator) -> NDArray[np.float64]:
     """Averages over ``n_reps`` resamples (with replacement) of perturbed and unperturbed
-    trials, shape ``(n_reps, 5, n_window)``."""
+    trials, shape ``(n_reps, len(RESPONSE), n_window)``."""
     data, baseline = responses.perturbed.data, responses.unperturbed
     n_p, n_u = len(data), len(baseline)
     counts_p = _draw_counts(n_p, n_reps, rng) / n_p
@@ -142,13 +152,15 @@ def _focused_choice(constant: NDArray[np.float64], linear: NDArray[np.float64]) 
 @dataclass(frozen=True)
 class _Condition:
     """One condition's responses, their stacked averages (over all perturbed trials
-    (:data:`_FULL`), then ``interval_reps`` resamples, then paper 000's subsets) and the
-    all-trial average's ``variants`` behind the systematic half-width (:func:`_variants`;
-    the first ``timing`` of them shift the timing)."""
+    (:data:`_FULL`), then ``interval_reps`` resamples, then paper 000's subsets; the angle's
+    gain pooled, :mod:`.gain`), the angle's ``gain`` (measured, pooled) and the all-trial
+    average's ``variants`` behind the systematic half-width (:func:`_variants`; the first
+    ``timing`` of them shift the timing)."""
 
     key: str
     responses: Responses
     averages: NDArray[np.float64]
+    gain: tuple[float, float]
     variants: NDArray[np.float64]
     timing: int
 
@@ -318,19 +330,21 @@ def _estimate(
     scale: float,
     systematic: float = 0.0,
     bias_unknown: bool = False,
+    moved: float = 0.0,
 ) -> Estimate:
     """An :class:`Estimate` from stacked values: all-trial, ``n_reps`` resamples, paper subsets.
 
     The interval is the all-trial value ± ``scale × s`` (:func:`_interval_scale`), ``s`` the
     resamples' sd; an sd settles with far fewer resamples than the 2.5 and 97.5 percentiles do.
     A ``systematic`` half-width (what the data cannot pin down, :func:`_systematic`) is added in
-    quadrature; a bias that nothing bounds is flagged (``bias_unknown``). No interval with a NaN
-    ``scale`` or fewer than two resamples.
+    quadrature, and what a correction ``moved`` the estimate and may have got wrong, in full
+    (:func:`_timing_point`: the pooled angle gain); a bias that nothing bounds is flagged
+    (``bias_unknown``). No interval with a NaN ``scale`` or fewer than two resamples.
     """
     centre, resampled, subsets = float(values[_FULL]), values[1 : 1 + n_reps], values[paper]
     interval = (np.nan, np.nan)
     if n_reps >= 2 and np.isfinite(scale):
-        half = float(np.hypot(scale * sd(resampled), systematic))
+        half = float(np.hypot(scale * sd(resampled), systematic)) + moved
         interval = (centre - half, centre + half)
     return Estimate(centre, sd(subsets), interval, subsets, bias_unknown=bias_unknown)
 
@@ -368,11 +382,21 @@ def estimate_timing_points(
     lengths = [samples(w, fs) for w in settings.windows_ms()]
     shift = round(settings.timing_uncertainty_ms * fs / 1000.0)
     lag = settings.coupler_lag_ms * fs / 1000.0
+    stacks = [_stacked(condition, settings, rng) for condition in responses.values()]
+    gains, factors = angle_gains(
+        np.stack([stack[:, _KIN[0], : lengths[0]] for stack in stacks]),
+        np.stack([stack[:, _PLATE, : lengths[0]] for stack in stacks]),
+        np.array([len(condition.perturbed) for condition in responses.values()]),
+        settings.interval_reps,
+        pool=settings.angle_gain == "pooled",
+    )
     conditions = []
-    for key, condition in responses.items():
-        averages = _stacked(condition, settings, rng)
+    for c, (key, condition) in enumerate(responses.items()):
+        averages = stacks[c]
+        averages[:, _ANGLES] *= factors[c][:, None, None]
         variants = _variants(averages[_FULL], condition.twist_torque, lengths[0], shift, lag, fs)
-        conditions.append(_Condition(key, condition, averages, *variants))
+        gain = (float(gains.measured[c]), float(gains.pooled[c]))
+        conditions.append(_Condition(key, condition, averages, gain, *variants))
     shared = None
     if settings.inertia_model == "session":
         model = _rest_model(settings)
@@ -462,6 +486,13 @@ def _timing_point(
         }
         variant_fits = _fit(condition.variants, None, name, fs, at_variants)
         systematic |= _systematic(variant_fits, condition.timing, centre, windows_fit)
+    # the pooled angle gain's move (:mod:`.gain`), in full: the data cannot tell how much of it
+    # was noise and how much a true difference between the conditions
+    moved = abs(1.0 - condition.gain[1] / condition.gain[0])
+    pooling = {
+        q: moved * abs(float(getattr(fitted[source[q]], q)[0][_FULL]))
+        for q in ("stiffness", "damping")
+    }
     scales = {q: scale for q in source}
     if shared is not None:  # the session's trials behind it
         scales["inertia"] = shared.scale
@@ -473,6 +504,7 @@ def _timing_point(
             scales[q],
             systematic.get(q, 0.0),
             bias_unknown and q in _SYSTEMATIC,
+            pooling.get(q, 0.0),
         )
         for q, name in source.items()
     }
@@ -508,6 +540,8 @@ def _timing_point(
             for w, k in zip(windows[1:], model_windows.stiffness[:, 0], strict=True)
         },
         adjustment_explained=responses.explained,
+        angle_gain=condition.gain[0],
+        angle_gain_pooled=condition.gain[1],
         warnings=_stiffness_warning(key, estimates["stiffness"]),
         onset_ms=trials.metadata["onset_ms"],
         time_s=np.arange(n) / fs,

@@ -35,13 +35,14 @@ from anklelab.signals import Trials
 
 __all__ = ["RESPONSE", "Responses", "condition_responses", "outliers"]
 
-RESPONSE = ("angle", "velocity", "acceleration", "torque", "time_angle")
-"""Channels of a response: rad, rad/s, rad/s², N·m, and rad·s: the time since the onset times
-the unfiltered angle, low-passed (the regressor of a stiffness that changes in time)."""
+RESPONSE = ("angle", "velocity", "acceleration", "torque", "time_angle", "plate_angle")
+"""Channels of a response: rad, rad/s, rad/s², N·m; rad·s: the time since the onset times the
+unfiltered angle, low-passed (the regressor of a stiffness that changes in time); and rad: the
+plate's rotation (the reference of the angle's gain, :mod:`.gain`)."""
 _CUT = (*RESPONSE, "torque_untwisted")  # cut from the stance: the responses, then the torque
 # without the coupler's twist correction, which only its average leaves
 _ANGLE, _TORQUE, _TIME_ANGLE = (RESPONSE.index(name) for name in ("angle", "torque", "time_angle"))
-_OFFSETS = [_ANGLE, _TORQUE, _CUT.index("torque_untwisted")]
+_OFFSETS = [_ANGLE, _TORQUE, _CUT.index("torque_untwisted"), _CUT.index("plate_angle")]
 _SCREENED = [RESPONSE.index("angle"), RESPONSE.index("torque")]
 _MAD_TO_SD = 1.4826
 _MIN_SCREENED = 5  # the median and MAD of 5 still stand one wild trial in 5 (a 1e6 N glitch)
@@ -56,7 +57,7 @@ class Responses:
     perturbed : Trials
         One response per kept perturbed trial, channels :data:`RESPONSE`, time 0 at the onset;
         metadata ``trial``, ``onset_ms``, ``offset`` (onset, samples after heel contact).
-    unperturbed : ndarray, shape (n_unperturbed, 5, n_window)
+    unperturbed : ndarray, shape (n_unperturbed, len(RESPONSE), n_window)
         The unperturbed trials' departures at the median onset, adjusted like the responses
         (mean zero): what the nominal's sampling error adds.
     nominal_dx : ndarray, shape (n_window,)

@@ -176,6 +176,10 @@ class TimingPoint:
         Stiffness for each sensitivity window (key: window in ms, ``"75"``), N·m/rad.
     adjustment_explained : float
         Fraction of the trial-to-trial variance the covariate adjustment removed.
+    angle_gain, angle_gain_pooled : float
+        The ankle angle's response over the plate's rotation in the analysis window, all trials
+        (``g_c``), and the gain the estimates use (pooled over the conditions, ``g*_c``;
+        :mod:`.gain`); NaN in files written before they existed.
     warnings : tuple of str
         Doubts about the estimate (plausibility checks, poorly determined quantities, a
         stiffness that changes within the window).
@@ -203,6 +207,8 @@ class TimingPoint:
     stiffness_change_in_window: Estimate | None = None
     window_stiffness: dict[str, float] = field(default_factory=dict)
     adjustment_explained: float = 0.0
+    angle_gain: float = np.nan
+    angle_gain_pooled: float = np.nan
     warnings: tuple[str, ...] = ()
     onset_ms: NDArray[np.float64] = field(default_factory=_empty, repr=False, compare=False)
     time_s: NDArray[np.float64] = field(default_factory=_empty, repr=False, compare=False)
@@ -245,6 +251,8 @@ class TimingPoint:
                 key: {"stiffness_nm_per_rad": value} for key, value in self.window_stiffness.items()
             },
             "adjustment_explained": self.adjustment_explained,
+            "angle_gain": self.angle_gain,
+            "angle_gain_pooled": self.angle_gain_pooled,
         }
         return entry | ({"warnings": list(self.warnings)} if self.warnings else {})
 
@@ -288,6 +296,8 @@ class TimingPoint:
                     for key, value in node.get("window_sensitivity", {}).items()
                 },
                 adjustment_explained=float(node.get("adjustment_explained", 0.0)),
+                angle_gain=_float(node.get("angle_gain")),
+                angle_gain_pooled=_float(node.get("angle_gain_pooled")),
                 warnings=tuple(node.get("warnings", ())),
             )
         except (KeyError, TypeError, ValueError) as exc:
@@ -400,7 +410,9 @@ class WalkingResults:
                 for k, v in document.get("settings", {}).items()
                 if k in WalkingSettings.model_fields
             }
-            settings.setdefault("inertia_model", "point")  # written before the setting existed
+            # written before these settings existed: what the analysis did then
+            settings.setdefault("inertia_model", "point")
+            settings.setdefault("angle_gain", "measured")
             return cls(
                 settings=WalkingSettings.model_validate(settings, strict=False),
                 platform_filters=dict(document.get("platform_filters", {})),

@@ -106,6 +106,12 @@ class WalkingSettings(Parameters):
         from (with ``stiffness_model = "auto"`` the linear one: the constant model's stiffness
         is then fitted around that inertia too); ``"point"``: each point's own, as paper 000
         fits it.
+    angle_gain
+        ``"pooled"`` (default): each condition's ankle angle is scaled to the gain against the
+        plate's rotation that the conditions share, as far as their gains differ by no more
+        than their noise explains (:mod:`anklelab.pipelines.walking.gain`); ``"measured"``:
+        the angle as recorded, as paper 000 takes it. Either way ``results.json`` gives each
+        condition's gain.
     covariate_adjustment, adjustment_span_ms, adjustment_guard_ms, adjustment_bins
         Remove each trial's own gait variation, predicted from its raw signals over the
         ``adjustment_span_ms`` before its onset (ending ``adjustment_guard_ms`` before it, in
@@ -176,6 +182,7 @@ class WalkingSettings(Parameters):
     sensitivity_windows_ms: tuple[float, ...] = (75.0, 125.0)
     stiffness_model: Literal["auto", "constant", "linear"] = "auto"
     inertia_model: Literal["session", "point"] = "session"
+    angle_gain: Literal["pooled", "measured"] = "pooled"
     covariate_adjustment: bool = True
     adjustment_span_ms: float = Field(100.0, gt=0)
     adjustment_guard_ms: float = Field(5.0, ge=0)

@@ -59,13 +59,16 @@ STANCE_CHANNELS = (
     "angle_raw",
     "time_angle",
     "torque_untwisted",
+    "plate_angle",
 )
 """Channels of the heel-contact-aligned stance trials (rad, rad/s, rad/s², N·m, m, N, rad; the
 ``_raw`` ones unfiltered and uncorrected for the platform, N·m, N, rad; ``time_angle``, rad·s,
 is the time since heel contact times the unfiltered angle, low-passed like the angle: the
 regressor of a stiffness that changes in time, see :func:`anklelab.ident.fit_impedance`;
 ``torque_untwisted``, N·m, is ``torque`` without the coupler's twist, the plate's own forces
-predicted from the motor angle alone)."""
+predicted from the motor angle alone; ``plate_angle``, rad, is the plate's rotation, the motor
+angle low-passed like the angle less the coupler's twist: the reference the ankle angle's gain
+is measured against, see :mod:`anklelab.pipelines.walking.gain`)."""
 _MISMATCH = "onset differs from the manifest's delay_ms"
 
 
@@ -354,12 +357,14 @@ def _stance_block(
     own = filters.predict(motor, combine=sagittal)
     grf_z, torque, dx = foot_load(own)
     untwisted = torque
+    plate_angle = lowpass(motor, **lp)
     if stiffness := settings.transmission_stiffness_nm_per_rad:
         # the foot's torque twists the coupler: the plate's own forces follow the plate, which
         # departs from the motor by -T/(K + c s), T/K delayed by up to the coupler's lag c/K (the
         # hinge is on the ankle's axis, so T is the load about it); T is low-passed already
         twist = advance(np.nan_to_num(torque) / stiffness, -settings.coupler_lag_ms * fs / 1000.0)
         grf_z, torque, dx = foot_load(own + filters.predict_departure(-twist, combine=sagittal))
+        plate_angle -= twist
     ankle = lowpass(ankle_raw, **lp)
     ankle_at_contact = ankle[rows, event][:, None]
     kin = kinematics(ankle - ankle_at_contact, fs, settings.derivative_window)
@@ -381,6 +386,7 @@ def _stance_block(
         "angle_raw": ankle_raw - ankle_at_contact,
         "time_angle": time_angle,
         "torque_untwisted": untwisted,
+        "plate_angle": plate_angle,
     }
     window = np.minimum(event[:, None] + np.arange(n_stance), width - 1)
     stance = np.empty((len(walking), len(STANCE_CHANNELS), n_stance))
