@@ -7,6 +7,7 @@ from __future__ import annotations
 import dataclasses
 import re
 
+import numpy as np
 import pytest
 
 from anklelab.ident.bench import BenchStiffness
@@ -100,3 +101,43 @@ def test_a_lever_arm_beyond_the_bench_distances_is_extrapolated_and_named():
     marked = [row[column].endswith(" (line extended)") for row in table.rows]
     assert marked == [True, False, True, True]  # the report marks them, plantarflexion too
     assert extrapolated_bench(points[1:3], bench) == [] == extrapolated_bench(points, [])
+
+
+@pytest.mark.parametrize(
+    ("gain", "flagged"),
+    [(1.0, False), (0.55, False), (1.45, False), (0.45, True), (57.3, True), (-1.0, True),
+     (float("nan"), False)],
+)  # fmt: skip
+def test_an_ankle_angle_that_does_not_follow_the_plate_is_implausible(gain, flagged):
+    messages = plausibility([dataclasses.replace(_point(1200.0), angle_gain=gain)], 0.04)
+    named = [m for m in messages if "times the plate's rotation" in m]
+    assert bool(named) == flagged
+    if flagged:
+        assert named[0].startswith(f"dorsi/100: the ankle angle moves {gain:.2f} times")
+
+
+@pytest.mark.filterwarnings("ignore::anklelab.errors.AnklelabWarning")
+def test_an_ankle_angle_recorded_in_degrees_is_named(twin):
+    """The goniometer's column in degrees: every point's angle moves about 57 times the plate's
+    (this small session's gains scatter by some percent)."""
+    from anklelab.data import Recording, WalkingTrial
+
+    walking = tuple(
+        WalkingTrial(
+            t.trial,
+            Recording(
+                t.recording.name,
+                dict(t.recording.columns) | {"ankle_angle": np.degrees(t.recording["ankle_angle"])},
+            ),
+            t.perturbed,
+            t.direction,
+            t.delay_ms,
+        )
+        for t in twin.walking
+    )
+    session = dataclasses.replace(twin, walking=walking)
+    result = analyze_walking(session, WalkingSettings(bootstrap_reps=10, interval_reps=40))
+    named = [w for w in result.warnings if "times the plate's rotation" in w]
+    assert len(named) == len(result.timing_points)
+    gains = [float(re.search(r"moves ([\d.]+) times", w)[1]) for w in named]
+    assert all(50 < gain < 66 for gain in gains)

@@ -19,6 +19,7 @@ from anklelab.ident.irf import PlatformFilters
 from anklelab.pipelines.walking.results import TimingPoint, sd
 
 __all__ = [
+    "ANGLE_GAIN_RANGE",
     "MAX_STIFFNESS_NM_PER_RAD",
     "MIN_STIFFNESS_NM_PER_RAD",
     "extrapolated_bench",
@@ -43,6 +44,11 @@ _ACROSS_FACTOR = 2.0  # it warns when the COP travels this many times farther ac
 FOOT_LENGTH_M = 0.30
 """A lever arm farther than this from the heel-contact point lies beyond any foot's toes."""
 _HEEL_MARGIN_M = 0.02  # a COP may sit slightly behind the heel-contact point
+ANGLE_GAIN_RANGE = (0.5, 1.5)
+"""The ankle angle's response over the plate's rotation (``angle_gain``) outside this range is
+implausible for a foot standing on the plate: the shank's own motion and a hinge off the
+ankle's axis move it by some percent, not by half; a goniometer recorded in degrees reads 57,
+one of the wrong sign reads below 0."""
 
 
 def plausibility(points: Sequence[TimingPoint], heel_to_ankle_m: float) -> list[str]:
@@ -92,6 +98,13 @@ def plausibility(points: Sequence[TimingPoint], heel_to_ankle_m: float) -> list[
                 f"{tp.key}: the lever arm {100 * tp.cop_m:.1f} cm lies outside the foot (expected "
                 f"{100 * lowest:.0f} to {100 * highest:.0f} cm from the ankle): check "
                 "heel_to_ankle_m, the plate geometry and its channel map"
+            )
+        low, high = ANGLE_GAIN_RANGE
+        if not low <= tp.angle_gain <= high and np.isfinite(tp.angle_gain):
+            messages.append(
+                f"{tp.key}: the ankle angle moves {tp.angle_gain:.2f} times the plate's rotation "
+                f"under the perturbation (expected {low:g} to {high:g}: the foot stands on the "
+                "plate): check the ankle angle's units (radians), sign and calibration"
             )
         if tp.vaf.mean < 0:
             messages.append(
