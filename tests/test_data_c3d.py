@@ -9,6 +9,7 @@ import re
 import struct
 import subprocess
 import sys
+from pathlib import Path
 
 import ezc3d
 import numpy as np
@@ -179,7 +180,6 @@ _GOOD: list[bytes] = []
 def _good_bytes():
     if not _GOOD:
         import tempfile
-        from pathlib import Path
 
         with tempfile.TemporaryDirectory() as root:
             path, _ = write_plate_file(Path(root) / "g.c3d", 3, "z", "mm")
@@ -238,6 +238,26 @@ def test_forceplate_writes_one_table_per_plate(tmp_path, plate_files):
     write_grf_tables(c3d.path, out, overwrite=True)
 
 
+def test_forceplate_never_deletes_its_input_nor_follows_a_link(tmp_path, plate_files):
+    """An input inside an earlier output is not replaced with it (it was deleted), and a
+    symbolic link as the output is named, not followed."""
+    c3d, _ = plate_files[(4, "y", "mm")]
+    out = tmp_path / "grf"
+    write_grf_tables(c3d.path, out)
+    kept = out / "trial.c3d"
+    kept.write_bytes(Path(c3d.path).read_bytes())
+    result = run_cli("forceplate", kept, "--out", out, "--force")
+    assert result.returncode == 2 and kept.exists()
+    assert result.stderr == f"error: --out {out}: holds the input {kept}; write elsewhere\n"
+    with pytest.raises(SessionFormatError, match="holds the input"):
+        write_grf_tables(kept, out, overwrite=True)
+    link = tmp_path / "link"
+    link.symlink_to(out)
+    result = run_cli("forceplate", c3d.path, "--out", link, "--force")
+    assert result.returncode == 2 and "a symbolic link" in result.stderr
+    assert sorted(p.name for p in out.iterdir()) == ["forceplate.json", "plate1.csv", "trial.c3d"]
+
+
 def run_cli(*args):
     code = "from anklelab.cli import run; run()"
     return subprocess.run(
@@ -269,7 +289,7 @@ def test_forceplate_command_on_c3d_and_on_a_session(tmp_path, plate_files):
     ("args", "message"),
     [
         (["nothing.c3d"], r"nothing\.c3d: no such file"),
-        (["{s}", "--out", "{s}/inside"], r"inside: the output would land inside the input"),
+        (["{s}", "--out", "{s}/inside"], r"--out .*inside: lies inside the input"),
         (["{bad}"], r"bad\.c3d: not a C3D file"),
         (["{c3d}", "--min-force", "-1"], r"Invalid value for '--min-force'"),
     ],

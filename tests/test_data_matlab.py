@@ -212,6 +212,40 @@ def test_errors_name_the_matlab_field(tmp_path, session, change, pattern):
         read_matlab(mutated(tmp_path, session, change))
 
 
+@pytest.mark.parametrize(
+    ("section", "name", "pattern"),
+    [
+        ("walking", "../../victim.csv",
+         r"walking\[0\]: recording name '\.\./\.\./victim\.csv' is not a plain file name"),
+        ("calibration", "sub/cal.csv", r"calibration\[0\]: recording name 'sub/cal\.csv' is not"),
+        ("bench", ".hidden.csv", r"bench\[0\]: recording name '\.hidden\.csv' is not"),
+    ],
+)  # fmt: skip
+def test_a_recording_name_that_leaves_its_folder_is_refused(tmp_path, session, section, name,
+                                                            pattern):  # fmt: skip
+    """Names become the files that `anklelab forceplate` writes (a name with '..' overwrote a
+    file outside --out): every reader refuses them."""
+    from anklelab.data import load_session
+
+    def change(root):
+        root[section][0, 0]["file"] = name
+
+    with pytest.raises(SessionFormatError, match=r"bad\.mat: " + pattern):
+        load_session(mutated(tmp_path, session, change))
+
+
+def test_repeated_calibration_file_names_are_refused(tmp_path, session):
+    """Two calibration recordings of one name would be one table, one file: refused as the
+    walking and bench sections' are."""
+    from anklelab.data import load_session
+
+    def change(root):
+        root["calibration"][0, 1]["file"] = root["calibration"][0, 0]["file"]
+
+    with pytest.raises(SessionFormatError, match=r"calibration\[1\]: duplicate file"):
+        load_session(mutated(tmp_path, session, change))
+
+
 def test_missing_field_and_missing_variable(tmp_path, session):
     root = as_matlab(session)
     names = [n for n in root["walking"].dtype.names if n != "delay_ms"]

@@ -30,7 +30,15 @@ from anklelab._lock import output_lock, reap_locks
 from anklelab._runs import RUN_FILE, RunManifest, sha256_file, write_run_manifest
 from anklelab.errors import AnklelabError, OutputError, ParameterError, ResultsFormatError
 
-__all__ = ["Run", "array_bytes", "check_input", "check_space", "output_directory", "output_file"]
+__all__ = [
+    "Run",
+    "array_bytes",
+    "check_input",
+    "check_output",
+    "check_space",
+    "output_directory",
+    "output_file",
+]
 
 MIN_FREE_BYTES = 64 << 10
 """Below this many free bytes a file system counts as full before anything is written."""
@@ -164,9 +172,12 @@ def _name_write_errors(path: Path) -> Iterator[None]:
         raise OSError(exc.errno, reason, str(path)) from None
 
 
-def _check_output(
-    path: Path, kind: Literal["file", "directory"], inputs: Sequence[Path], option: str
+def check_output(
+    path: Path, kind: Literal["file", "directory"], inputs: Sequence[Path], option: str = "--out"
 ) -> Path:
+    """``path`` if it can be written as a ``kind``: not a symbolic link, not the other kind, not
+    inside an input nor holding one, on a writable file system with space (for commands that
+    write their output with their own atomic writer)."""
     if os.path.islink(path):
         raise OutputError(
             f"{option} {path}: a symbolic link (to {os.readlink(path)}); name the real path"
@@ -214,7 +225,7 @@ def output_file(
     The command writes ``path`` itself, with the atomic writers. Raises :class:`OutputError`
     naming the option and the path when it cannot be written as asked.
     """
-    _check_output(path, "file", inputs, option)
+    check_output(path, "file", inputs, option)
     with _parents(path), output_lock(path), _name_write_errors(path):
         _refuse_existing(path, force, option)
         reap_temporaries(path.parent)
@@ -306,7 +317,7 @@ def output_directory(
     Run
         Write into ``run.directory``; fill in ``run.settings`` and ``run.add_input``.
     """
-    _check_output(path, "directory", inputs, option)
+    check_output(path, "directory", inputs, option)
     with _parents(path), output_lock(path), _name_write_errors(path):
         if not (path.is_dir() and next(path.iterdir(), None) is None):
             _refuse_existing(path, force, option)

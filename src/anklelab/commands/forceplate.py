@@ -36,8 +36,10 @@ def forceplate(
     up). Columns: time_s, grf_x_n, grf_y_n, grf_z_n, cop_x_m, cop_y_m, cop_z_m,
     free_moment_nm; GRF is the force of the plate on the body, positions are in metres.
     """
+    from anklelab.commands._files import check_output
     from anklelab.data.grf import write_grf_tables
 
+    check_output(out, "directory", [source])
     tables = write_grf_tables(source, out, min_force_n=min_force, overwrite=force)
     typer.echo(
         f"{out}: {len(tables)} table(s) from {source.name} ({', '.join(sorted(tables)[:4])}"

@@ -44,6 +44,8 @@ __all__ = [
     "check_bench_tests",
     "check_columns",
     "check_distance",
+    "check_file_name",
+    "check_file_names",
     "check_recording",
     "check_recordings",
     "check_unique",
@@ -501,6 +503,32 @@ def check_unique(items: Iterable[tuple[Any, str]], what: str, file: str) -> None
         seen[value] = where
 
 
+def check_file_name(name: str, where: str, suffix: str = "") -> None:
+    """A recording's file name must be a plain name inside its section's folder: no folder
+    separator, not hidden (so never ``..``), ending in ``suffix``. Whatever a session file
+    says, nothing derived from its names may land outside the folder it is written to."""
+    if not name or name.startswith(".") or "/" in name or "\\" in name or not name.endswith(suffix):
+        raise SessionFormatError(
+            f"{where}: recording name {excerpt(name)} is not a plain file name"
+            + (f" ending in {suffix!r}" if suffix else "")
+            + " (no folder separator, not starting with '.')"
+        )
+
+
+def check_file_names(session: Session, origin: str) -> None:
+    """Every recording's file name plain (:func:`check_file_name`) and unique in its section."""
+    sections = {
+        "calibration": session.calibration,
+        "walking": [t.recording for t in session.walking],
+        "bench": [t.recording for t in session.bench],
+    }
+    for section, recordings in sections.items():
+        for i, recording in enumerate(recordings):
+            check_file_name(recording.name, f"{origin}: {section}[{i}]")
+        labelled = ((r.name, f"{section}[{i}]") for i, r in enumerate(recordings))
+        check_unique(labelled, "file", origin)
+
+
 def check_walking_trials(file: str, trials: Iterable[tuple[WalkingTrial, str]]) -> None:
     """Unique trial ids and files across a walking manifest; pairs are (trial, row label)."""
     trials = list(trials)
@@ -566,6 +594,7 @@ def validate_session(session: Session, origin: str = "session") -> None:
             canonical(tree or {})
         except ValueError as exc:
             raise SessionFormatError(f"{origin}.{name}: {exc}") from None
+    check_file_names(session, origin)
     info = session.info
     fs, nullable = info.sample_rate_hz, info.force_plate.nullable
     for i, rec in enumerate(session.calibration):

@@ -59,6 +59,7 @@ from anklelab._atomic import atomic_directory
 from anklelab.data import _toml
 from anklelab.data._checks import (
     check_distance,
+    check_file_name,
     check_recording,
     check_unique,
     check_walking_row,
@@ -605,14 +606,6 @@ def _manifest(rows: list[dict[str, str]], columns: tuple[str, ...]) -> str:
     return _csv_line(header) + "".join(_csv_line(row.get(k, "") for k in header) for row in rows)
 
 
-def _plain_name(name: str, where: str, suffix: str = "") -> None:
-    if not name or name.startswith(".") or "/" in name or "\\" in name or not name.endswith(suffix):
-        raise SessionFormatError(
-            f"{where}: recording name {name!r} is not a plain file name"
-            + (f" ending in {suffix!r}" if suffix else "")
-        )
-
-
 def _number_text(value: float) -> str:
     return "" if math.isnan(value) else repr(float(value))
 
@@ -636,15 +629,9 @@ def write_directory(
     Path
         ``path``.
     """
-    validate_session(session)
-    names = [r.name for r in session.calibration]
-    for i, name in enumerate(names):
-        _plain_name(name, f"session.calibration[{i}]", ".csv")
-    check_unique(((n, f"calibration[{i}]") for i, n in enumerate(names)), "file", "session")
-    for i, trial in enumerate(session.walking):
-        _plain_name(trial.recording.name, f"session.walking[{i}]")
-    for i, test in enumerate(session.bench):
-        _plain_name(test.recording.name, f"session.bench[{i}]")
+    validate_session(session)  # plain, unique file names among the rest
+    for i, recording in enumerate(session.calibration):  # the folder is read as *.csv
+        check_file_name(recording.name, f"session: calibration[{i}]", ".csv")
     target = Path(path)
     tick = ticker(progress, len(session.calibration) + len(session.walking) + len(session.bench))
 

@@ -117,8 +117,9 @@ def write_grf_tables(
 ) -> dict[str, Table]:
     """Compute :func:`grf_tables` and write them under ``out``, atomically.
 
-    ``out`` must not lie inside ``source``; an existing ``out`` is replaced only with
-    ``overwrite`` and only if it is an earlier output (it holds ``forceplate.json``).
+    ``out`` must neither lie inside ``source`` nor hold it; an existing ``out`` is replaced
+    only with ``overwrite`` and only if it is an earlier output (it holds ``forceplate.json``).
+    Every table lands inside ``out``, whatever the session's recording names say.
 
     Returns
     -------
@@ -130,6 +131,8 @@ def write_grf_tables(
     source, out = Path(source), Path(out)
     if out.resolve().is_relative_to(source.resolve()):
         raise SessionFormatError(f"{out}: the output would land inside the input {source}")
+    if source.resolve().is_relative_to(out.resolve()):
+        raise SessionFormatError(f"{out}: holds the input {source}; write elsewhere")
     if out.exists() and not overwrite:
         raise SessionFormatError(f"{out}: already exists; pass --force to replace it")
     tables = grf_tables(source, min_force_n=min_force_n)
@@ -144,6 +147,8 @@ def write_grf_tables(
     try:
         with atomic_directory(out, overwrite=overwrite, marker=MANIFEST) as tmp:
             for name, table in tables.items():
+                if not (tmp / name).resolve().is_relative_to(tmp.resolve()):
+                    raise SessionFormatError(f"{source}: table {name!r} would land outside {out}")
                 (tmp / name).parent.mkdir(parents=True, exist_ok=True)
                 (tmp / name).write_text(_csv(table), encoding="utf-8")
             (tmp / MANIFEST).write_text(json.dumps(manifest, indent=2) + "\n", encoding="utf-8")

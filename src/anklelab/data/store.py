@@ -16,7 +16,7 @@ from pathlib import Path
 from typing import Any, Literal
 
 from anklelab._version import __version__
-from anklelab.data._checks import info_to_mapping
+from anklelab.data._checks import check_file_names, info_to_mapping
 from anklelab.data._files import file_kind
 from anklelab.data._progress import Progress
 from anklelab.data._tree import canonical, tree_differences
@@ -156,11 +156,14 @@ def load_session_hashed(
     """
     kind = session_kind(path)
     if kind == "h5":
-        return read_hdf5(path, progress=progress), session_hash(path)
+        session = read_hdf5(path, progress=progress)
+        check_file_names(session, str(path))
+        return session, session_hash(path)
     if kind == "dir":
         session, digest = _read_directory(path, progress)
     else:
         session, digest = read_matlab(path, progress=progress), _file_digest(Path(path))
+        check_file_names(session, str(path))
     provenance = dict(session.provenance)
     provenance.setdefault("anklelab_version", __version__)
     provenance["source_sha256"] = digest
