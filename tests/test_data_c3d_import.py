@@ -279,9 +279,37 @@ def test_import_c3d_command_and_default_import(twin, tmp_path):
     proc = run("import", "c3d", root, "--map", MAP, "--out", out)
     assert proc.returncode == 2 and re.search(r"s\.h5: already exists; pass --force", proc.stderr)
     proc = run("import", "c3d", root, "--map", MAP, "--out", root / "inside.h5")
-    assert proc.returncode == 2 and "would land inside the input" in proc.stderr
+    assert proc.returncode == 2 and "lies inside the input" in proc.stderr
     assert not (root / "inside.h5").exists()
     # the plain `anklelab import SOURCE` still takes a session
     result = CliRunner().invoke(app, ["import", str(out), "--out", str(tmp_path / "again.h5")])
     assert result.exit_code == 0, result.output
     assert len(load_session(tmp_path / "again.h5").walking) == len(load_session(out).walking)
+
+
+def _cli(*args):
+    code = "from anklelab.cli import run; run()"
+    return subprocess.run(
+        [sys.executable, "-c", code, *map(str, args)], capture_output=True, text=True
+    )
+
+
+def test_import_c3d_never_writes_over_its_inputs(twin, tmp_path):
+    """The mapping and the trial list are inputs like the directory: --out may not name them,
+    even with --force; nor may --out be a symbolic link (as for `anklelab import`)."""
+    _, root, _ = twin
+    mapping = tmp_path / "map.toml"
+    mapping.write_text(MAP.read_text())
+    (tmp_path / "link.h5").symlink_to(tmp_path / "target.h5")
+    cases = {
+        mapping: "lies inside the input",
+        root / "trials.csv": "lies inside the input",
+        tmp_path / "link.h5": "a symbolic link",
+    }
+    before = mapping.read_bytes(), (root / "trials.csv").read_bytes()
+    for out, message in cases.items():
+        proc = _cli("import", "c3d", root, "--map", mapping, "--out", out, "--force")
+        assert proc.returncode == 2, proc.stderr
+        assert re.fullmatch(rf"error: --out \S+: .*{message}.*\n", proc.stderr), proc.stderr
+    assert (mapping.read_bytes(), (root / "trials.csv").read_bytes()) == before
+    assert not (tmp_path / "target.h5").exists()

@@ -267,3 +267,29 @@ def _tiny(tmp_path):
     path = tmp_path / "tiny_source.mat"
     scipy.io.savemat(path, {"S01": root})
     return path
+
+
+@pytest.mark.parametrize("target", ["mat", "map", "link"])
+def test_import_matlab_never_writes_over_its_inputs(twin, tmp_path, target):
+    """The .mat file and the mapping are inputs: --out may not name them, even with --force;
+    nor may --out be a symbolic link (as for `anklelab import`)."""
+    import subprocess
+    import sys
+
+    _, source = twin
+    mat, mapping = tmp_path / "S07.mat", tmp_path / "map.toml"
+    shutil.copy(source, mat)
+    shutil.copy(MAP, mapping)
+    (tmp_path / "link.h5").symlink_to(tmp_path / "target.h5")
+    out = {"mat": mat, "map": mapping, "link": tmp_path / "link.h5"}[target]
+    before = mat.read_bytes(), mapping.read_bytes()
+    code = "from anklelab.cli import run; run()"
+    args = ["import", "matlab", mat, "--map", mapping, "--out", out, "--force"]
+    proc = subprocess.run(
+        [sys.executable, "-c", code, *map(str, args)], capture_output=True, text=True
+    )
+    assert proc.returncode == 2
+    message = "a symbolic link" if target == "link" else "lies inside the input"
+    assert re.fullmatch(rf"error: --out \S+: .*{message}.*\n", proc.stderr), proc.stderr
+    assert (mat.read_bytes(), mapping.read_bytes()) == before
+    assert not (tmp_path / "target.h5").exists()

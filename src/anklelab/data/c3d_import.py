@@ -51,7 +51,7 @@ from anklelab.data.session import BenchTest, Recording, Session, WalkingTrial, l
 from anklelab.errors import ParameterError, SessionFormatError
 from anklelab.forceplate import CHANNELS, GRF_COP_CHANNELS, SIX_AXIS_CHANNELS
 
-__all__ = ["C3D_MAP_FORMAT", "C3DMapping", "import_c3d"]
+__all__ = ["C3D_MAP_FORMAT", "C3DMapping", "c3d_import_inputs", "import_c3d"]
 
 C3D_MAP_FORMAT = "anklelab-c3d-map/1"
 ALIGNMENT_DEG = 10.0
@@ -326,18 +326,60 @@ def import_c3d(directory: str | Path, mapping: str | Path, *, workers: int = 2) 
         A malformed file or trial list (naming the file and the row, label or parameter).
     """
     root, mapping = Path(directory), Path(mapping)
+    spec, entries, read = _plan(root, mapping)
+    with naming_the_mapping(mapping):
+        return _import(root, mapping, spec, entries, read, workers)
+
+
+def c3d_import_inputs(directory: str | Path, mapping: str | Path) -> list[Path]:
+    """The files :func:`import_c3d` reads, for a command to check its output against before
+    reading them.
+
+    Parameters
+    ----------
+    directory : str or Path
+        The C3D files (and the CSV trial list, if the mapping uses one).
+    mapping : str or Path
+        The mapping TOML.
+
+    Returns
+    -------
+    list of Path
+        The mapping, the CSV trial list (if the mapping names one) and the C3D files.
+
+    Raises
+    ------
+    ParameterError, SessionFormatError
+        As :func:`import_c3d`, for the mapping and the trial list.
+    """
+    mapping = Path(mapping)
+    return [mapping, *_plan(Path(directory), mapping)[2]]
+
+
+def _plan(root: Path, mapping: Path) -> tuple[C3DMapping, list[Entry], list[Path]]:
+    """The mapping, the trial list's entries and the files to read (the trial list, if the
+    mapping names one, then the C3D files)."""
     if not root.is_dir():
         raise SessionFormatError(f"{root}: not a directory; expected a directory of C3D files")
     spec = read_map(mapping, C3DMapping, C3D_MAP_FORMAT)
     with naming_the_mapping(mapping):
-        return _import(root, mapping, spec, workers)
+        if isinstance(spec.trials, TrialsFromCsv):
+            entries = _entries_from_csv(root, spec.trials)
+            listed = [root / spec.trials.file]
+        else:
+            entries = _entries_from_events(root, spec.trials)
+            listed = []
+    return spec, entries, [*listed, *(path for _, path, _ in entries)]
 
 
-def _import(root: Path, mapping: Path, spec: C3DMapping, workers: int) -> Session:
-    if isinstance(spec.trials, TrialsFromCsv):
-        entries = _entries_from_csv(root, spec.trials)
-    else:
-        entries = _entries_from_events(root, spec.trials)
+def _import(
+    root: Path,
+    mapping: Path,
+    spec: C3DMapping,
+    entries: list[Entry],
+    read: list[Path],
+    workers: int,
+) -> Session:
     files = read_c3d_files([path for _, path, _ in entries], workers=workers)
     first = files[0]
     rate = first.analog_rate_hz
@@ -392,8 +434,6 @@ def _import(root: Path, mapping: Path, spec: C3DMapping, workers: int) -> Sessio
     if spec.plate.delay_ms:  # as session.toml's [force_plate] delay_ms
         plate_table["delay_ms"] = spec.plate.delay_ms
     info = session_info(spec.session, rate, plate_table)
-    listed = [root / spec.trials.file] if isinstance(spec.trials, TrialsFromCsv) else []
-    read = [*listed, *(path for _, path, _ in entries)]
     provenance = import_provenance(root, "c3d", mapping, read)
     return Session(info, tuple(calibration), tuple(walking), tuple(bench), None, provenance)
 
