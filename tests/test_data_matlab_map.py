@@ -293,3 +293,87 @@ def test_import_matlab_never_writes_over_its_inputs(twin, tmp_path, target):
     assert re.fullmatch(rf"error: --out \S+: .*{message}.*\n", proc.stderr), proc.stderr
     assert (mat.read_bytes(), mapping.read_bytes()) == before
     assert not (tmp_path / "target.h5").exists()
+
+
+MAP_3D = """
+format = "anklelab-matlab-map/1"
+sample_rate_hz = 1000.0
+
+[session]
+subject = "S01"
+geometry = { ankle_height_m = 0.08, heel_to_ankle_m = 0.04 }
+
+[plate]
+type = "grf_cop"
+anterior_axis = "+x"
+
+[columns]
+motor_angle = { field = "angle", units = "deg" }
+ankle_angle = { field = "ankle", units = "deg" }
+grf_x_n = { field = "GRF", column = 1 }
+grf_y_n = { field = "GRF", column = 2 }
+grf_z_n = { field = "GRF", column = 3 }
+cop_x_m = { field = "COP", column = 1 }
+cop_y_m = { field = "COP", column = 2 }
+
+[[calibration]]
+path = "S01.calibration"
+layout = "matrices"
+
+[[walking]]
+path = "S01.dorsiflexion.t{delay_ms}"
+layout = "matrices"
+perturbed = true
+direction = "dorsi"
+
+[[walking]]
+path = "S01.control"
+layout = "matrices"
+"""
+
+
+@pytest.mark.parametrize("layout", ["samples x trials", "samples x components x trials"])
+def test_matrices_count_trials_from_the_mapped_fields(tmp_path, layout):
+    """MATLAB stores samples x 1 as a vector and samples x components x 1 as a matrix: a timing
+    point with one trial is one trial, whatever unmapped fields (EMG, 4 channels) it holds."""
+    rng = np.random.default_rng(1)
+    n, three_d = 300, layout == "samples x components x trials"
+
+    def point(k):
+        fields = {
+            "angle": rng.normal(size=(n, k)),
+            "ankle": rng.normal(size=(n, k)),
+            "EMG": rng.normal(size=(n, 4, k)),
+        }
+        if three_d:
+            fields["GRF"] = rng.normal(size=(n, 3, k)) + np.array([0.0, 0.0, 600.0])[:, None]
+            fields["COP"] = rng.normal(size=(n, 2, k))
+        else:
+            fields |= {c: rng.normal(size=(n, k)) for c in ("Fx", "Fy", "CoPx", "CoPy")}
+            fields["Fz"] = 600 + rng.normal(size=(n, k))
+        return fields
+
+    root = {"fs": 1000.0, "dorsiflexion": {"t100": point(3), "t225": point(1)}, "control": point(2)}
+    if three_d:
+        root["calibration"] = point(1)
+        mapping = tmp_path / "map.toml"
+        mapping.write_text(MAP_3D)
+    else:
+        cal = {"angle": rng.normal(size=(n, 1)), "GRF": rng.normal(size=(n, 3))}
+        root["calibration"] = struct_array([cal | {"COP": rng.normal(size=(n, 2))}])
+        mapping = MAP
+    path = tmp_path / "one_trial.mat"
+    scipy.io.savemat(path, {"S01": root})
+    session = import_matlab(path, mapping)
+    labels = sorted(w.trial for w in session.walking)
+    assert labels == [
+        "S01.control(1)",
+        "S01.control(2)",
+        "S01.dorsiflexion.t100(1)",
+        "S01.dorsiflexion.t100(2)",
+        "S01.dorsiflexion.t100(3)",
+        "S01.dorsiflexion.t225(1)",
+    ]
+    one = next(w for w in session.walking if w.trial == "S01.dorsiflexion.t225(1)")
+    angle = root["dorsiflexion"]["t225"]["angle"][:, 0]
+    np.testing.assert_allclose(one.recording["motor_angle"], np.radians(angle))

@@ -6,7 +6,8 @@ path's dot-separated parts are matched against field names, ``{subject}``, ``{di
 ``{delay_ms}`` capturing part of a name (``t225`` gives 225) and ``*`` matching anything. Each
 matched struct holds trials either as a struct array (``layout = "elements"``: one trial per
 element, each field a vector, or a matrix of which ``column`` picks one) or as signal matrices
-(``layout = "matrices"``: each field samples x trials, or samples x components x trials; NaN
+(``layout = "matrices"``: each field samples x trials, or samples x components x trials; the
+trials are counted from the mapped fields, one trial may lack its trailing dimension of 1; NaN
 padding at the end of shorter trials is removed). ``[columns.<name>]`` says which field holds
 each session column and how to convert it (``units``, ``scale``, ``flip``), or gives a constant
 ``value``; a group may override them. ``time_s`` defaults to the sample index over the rate.
@@ -152,8 +153,15 @@ def _natural(name: str) -> list[object]:
 # --- trials ---------------------------------------------------------------------------------------
 
 
-def _trials(value: Any, group: Group, where: str) -> list[tuple[str, dict[str, Any]]]:
-    """(index label, fields) of each trial a matched value holds."""
+def _trials(
+    value: Any, group: Group, specs: Mapping[str, FieldMap], where: str
+) -> list[tuple[str, dict[str, Any]]]:
+    """(index label, fields) of each trial a matched value holds.
+
+    In the ``matrices`` layout the trials are counted from the mapped fields only: the last
+    axis of samples x trials (samples x components x trials for a field with a ``column``). A
+    field with one dimension fewer holds one trial, as MATLAB drops a trailing dimension of 1.
+    """
     if group.layout == "elements":
         if isinstance(value, Mapping):
             return [("(1)", dict(value))]
@@ -163,20 +171,32 @@ def _trials(value: Any, group: Group, where: str) -> list[tuple[str, dict[str, A
         raise SessionFormatError(f'{where}: expected a struct array (layout = "elements")')
     if not isinstance(value, Mapping):
         raise SessionFormatError(f"{where}: expected a struct of signal matrices")
-    counts = {np.asarray(v).shape[-1] for v in value.values() if np.asarray(v).ndim >= 2}
-    if not counts and any(np.asarray(v).ndim == 1 for v in value.values()):
-        return [("(1)", dict(value))]  # one trial: MATLAB stored samples x 1 as a vector
-    if len(counts) != 1:
+    ndims: dict[str, int] = {}  # dimensions of each mapped field, with its trial axis
+    for spec in specs.values():
+        if spec.field is not None and spec.field in value:
+            ndims.setdefault(spec.field, 2 if spec.column is None else 3)
+    counts: dict[str, int] = {}
+    for name, ndim in ndims.items():
+        shape = np.shape(value[name])
+        if len(shape) not in (ndim, ndim - 1):
+            expected = "samples x trials" if ndim == 2 else "samples x components x trials"
+            raise SessionFormatError(
+                f"{where}.{name}: an array of shape {shape}; expected {expected} "
+                '(layout = "matrices")'
+            )
+        counts[name] = shape[-1] if len(shape) == ndim else 1
+    if len(set(counts.values())) > 1:
+        held = ", ".join(f"{name} {count}" for name, count in counts.items())
         raise SessionFormatError(
-            f"{where}: the signal matrices hold different numbers of trials ({sorted(counts)}) "
-            'or none; expected samples x trials (layout = "matrices")'
+            f"{where}: the mapped fields hold different numbers of trials ({held}); expected "
+            'the same trials in every field (layout = "matrices")'
         )
-    (count,) = counts
+    count = next(iter(counts.values()), 1)  # no mapped field: the first missing one is named
     return [
         (
             f"({k + 1})",
             {
-                name: np.asarray(v)[..., k] if np.asarray(v).ndim >= 2 else v
+                name: np.asarray(v)[..., k] if np.ndim(v) == ndims.get(name) else v
                 for name, v in value.items()
             },
         )
@@ -336,7 +356,7 @@ def _import(path: Path, mapping: Path, spec: MatlabMapping, subject: str | None)
             specs = {c: m for c, m in specs.items() if c != "ankle_angle"}
         required = ("time_s", "motor_angle", *(("ankle_angle",) if section == "walking" else ()))
         required += plate_model.channels
-        for index, fields in _trials(value, group, where):
+        for index, fields in _trials(value, group, specs, where):
             label = f"{resolved}{index}"
             trial_where = f"{where}{index}"
             rec = _recording(fields, specs, required, rate, trial_where, _file_name(label))
