@@ -111,6 +111,20 @@ def test_analog_scale_gen_scale_offset_and_events(tmp_path):
         c3d.analog("motor")
 
 
+def test_a_duplicated_analog_label_is_refused_where_it_is_used(tmp_path):
+    t = np.arange(100) / 1000.0
+    path = write_c3d(tmp_path / "d.c3d", {"Fx": t, "Gonio": t, "Motor": t, "Fz": t}, per_frame=1)
+    c = ezc3d.c3d(str(path))
+    c["parameters"]["ANALOG"]["LABELS"]["value"] = ["Motor", "Gonio", "Motor", "Motor"]
+    c.write(str(path))
+    c3d = read_c3d(path)
+    np.testing.assert_array_equal(c3d.analog("Gonio"), t.astype(np.float32))
+    with pytest.raises(
+        SessionFormatError, match=r"^\S+d\.c3d: ANALOG:LABELS has 'Motor' at channels 1, 3 and 4$"
+    ):
+        c3d.analog("Motor")
+
+
 def _patch_offset(path, values):
     """Write ANALOG:OFFSET values into a file (ezc3d always writes zeros)."""
     raw = bytearray(path.read_bytes())

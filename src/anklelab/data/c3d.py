@@ -167,7 +167,14 @@ class C3DFile:
         return self.start_s + np.arange(self.n_samples) / self.analog_rate_hz
 
     def analog(self, label: str) -> NDArray[np.float64]:
-        """The channel called ``label`` (an error names the file and the labels it has)."""
+        """The channel called ``label``.
+
+        Raises
+        ------
+        SessionFormatError
+            Naming the file and the labels it has, when no channel or several are called
+            ``label``.
+        """
         if label not in self.labels:
             from anklelab._params import did_you_mean
 
@@ -175,6 +182,10 @@ class C3DFile:
                 f"{self.path}: no analog channel {label!r}{did_you_mean(label, self.labels)} "
                 f"(ANALOG:LABELS: {', '.join(self.labels) or 'none'})"
             )
+        found = [str(k + 1) for k, name in enumerate(self.labels) if name == label]
+        if len(found) > 1:
+            at = f"{', '.join(found[:-1])} and {found[-1]}"
+            raise SessionFormatError(f"{self.path}: ANALOG:LABELS has {label!r} at channels {at}")
         return self.analogs[self.labels.index(label)]
 
     def plate(self, number: int) -> C3DPlate:
