@@ -200,6 +200,20 @@ def _map(tmp_path, old, new):
             SessionFormatError,
             r"S07\.calibration: expected one number",
         ),
+        (
+            'layout = "matrices"\nperturbed = true',
+            'layout = "matrices"\nperturbed = true\ndelay_ms = 225',
+            ParameterError,
+            r"map\.toml: invalid parameters: walking\.0\.delay_ms: given both here and by the "
+            r"\{delay_ms\} wildcard of path '\{subject\}\.\{direction\}\.t\{delay_ms\}'; give "
+            r"one; got 225",
+        ),
+        (
+            'layout = "matrices"\nperturbed = true',
+            'layout = "matrices"\nperturbed = true\ndirection = "dorsi"',
+            ParameterError,
+            r"walking\.0\.direction: given both here and by the \{direction\} wildcard",
+        ),
     ],
 )
 def test_malformed_maps_and_files_name_the_key_or_path(twin, tmp_path, old, new, error, message):

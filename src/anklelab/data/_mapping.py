@@ -20,6 +20,7 @@ from typing import Any, TypeVar
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from pydantic import Field, model_validator
+from pydantic_core import PydanticCustomError
 
 from anklelab._params import Parameters, parameters_from_mapping
 from anklelab.data._checks import info_from_mapping
@@ -32,6 +33,7 @@ __all__ = [
     "ColumnMap",
     "column_quantity",
     "import_provenance",
+    "key_error",
     "naming_the_mapping",
     "read_map",
     "session_info",
@@ -47,6 +49,12 @@ UNITS: dict[str, dict[str, float]] = {
 """Units a mapping may give, by quantity, with their factor to the SI unit."""
 
 M = TypeVar("M", bound=Parameters)
+
+
+def key_error(message: str) -> PydanticCustomError:
+    """A validator's error that the mapping's message prefixes with the dotted key it concerns
+    (and suffixes with the value given), like pydantic's own errors."""
+    return PydanticCustomError("mapping", "{message}", {"message": message})
 
 
 def column_quantity(column: str) -> str | None:

@@ -25,7 +25,7 @@ from typing import Any, Literal
 
 import numpy as np
 from numpy.typing import NDArray
-from pydantic import Field, model_validator
+from pydantic import Field, ValidationInfo, field_validator, model_validator
 
 from anklelab._params import Parameters
 from anklelab.data._checks import check_walking_row
@@ -33,6 +33,7 @@ from anklelab.data._mapping import (
     ColumnMap,
     SessionTable,
     import_provenance,
+    key_error,
     naming_the_mapping,
     read_map,
     session_info,
@@ -73,6 +74,16 @@ class Group(Parameters):
     delay_ms: float | None = None
     directions: dict[str, Literal["dorsi", "plantar"]] = Field(default_factory=dict)
     columns: dict[str, FieldMap] = Field(default_factory=dict)
+
+    @field_validator("direction", "delay_ms")
+    @classmethod
+    def _not_also_a_wildcard(cls, value: object, info: ValidationInfo) -> object:
+        wildcard, path = f"{{{info.field_name}}}", info.data.get("path", "")
+        if wildcard in path:
+            raise key_error(
+                f"given both here and by the {wildcard} wildcard of path {path!r}; give one"
+            )
+        return value
 
 
 class MatlabMapping(Parameters):
