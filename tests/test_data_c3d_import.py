@@ -70,8 +70,10 @@ def export_trial(path, recording, geometry, *, events=(), walking_axis="+y"):
     )
 
 
-def export_session(session, root, *, events=False):
-    """Calibration and walking trials as C3D files, with trials.csv (text labels)."""
+def export_session(session, root, *, events=False, other_foot_s=None):
+    """Calibration and walking trials as C3D files, with trials.csv (text labels); with
+    ``events``, the heel strikes (context Right) and the onsets, and with ``other_foot_s`` the
+    left foot's strikes that long after the right's."""
     root.mkdir()
     geometry = session.info.force_plate
     rows = [["file", "role", "label", "perturbed", "direction", "delay_ms"]]
@@ -85,6 +87,8 @@ def export_session(session, root, *, events=False):
             fz = w.recording.stack(CHANNELS)[4:].sum(axis=0)
             strike = w.recording.time_s[np.argmax(fz > 25.0)]
             marks = [("Foot Strike", "Right", strike)]
+            if other_foot_s is not None:
+                marks.append(("Foot Strike", "Left", strike + other_foot_s))
             if w.perturbed:
                 onset = strike + (w.delay_ms + 3.0) / 1000.0  # an onset a little late
                 marks.append(("Dorsi" if w.direction == "dorsi" else "Plantar", "General", onset))
@@ -139,25 +143,60 @@ def test_c3d_plate_stored_as_six_axis_or_grf_cop(twin, tmp_path, kind):
     assert bool(results.warnings) == (kind == "grf_cop")
 
 
-def test_trial_roles_from_events(twin, tmp_path):
-    session, _, _ = twin
-    small = type(session)(session.info, session.calibration, session.walking[:12], (), None, {})
-    root = export_session(small, tmp_path / "ev", events=True)
-    (root / "trials.csv").unlink()
+def _events_map(tmp_path, extra=""):
     text = MAP.read_text().replace(
         '[trials]\nsource = "csv"\nfile = "trials.csv"',
         '[trials]\nsource = "events"\ncalibration = ["cal_*.c3d"]\nheel_strike = "Foot Strike"\n'
-        'dorsi = "Dorsi"\nplantar = "Plantar"\ntiming_points_ms = [100, 225, 350, 475]',
+        'dorsi = "Dorsi"\nplantar = "Plantar"\ntiming_points_ms = [100, 225, 350, 475]' + extra,
     )
     (tmp_path / "map.toml").write_text(text)
-    imported = import_c3d(root, tmp_path / "map.toml")
-    assert len(imported.calibration) == 2
-    got = [(w.trial, w.perturbed, w.direction, w.delay_ms) for w in imported.walking]
+    return tmp_path / "map.toml"
+
+
+def _events_export(session, root, **options):
+    small = type(session)(session.info, session.calibration, session.walking[:12], (), None, {})
+    export_session(small, root, events=True, **options)
+    (root / "trials.csv").unlink()
     want = [
         (f"walk_{int(w.trial):03d}", w.perturbed, w.direction, w.delay_ms) for w in small.walking
     ]
+    return root, want
+
+
+def _conditions(imported):
+    return [(w.trial, w.perturbed, w.direction, w.delay_ms) for w in imported.walking]
+
+
+def test_trial_roles_from_events(twin, tmp_path):
+    session, _, _ = twin
+    root, want = _events_export(session, tmp_path / "ev")
+    imported = import_c3d(root, _events_map(tmp_path))
+    assert len(imported.calibration) == 2
+    got = _conditions(imported)
     assert [g[:3] for g in got] == [w[:3] for w in want]
     np.testing.assert_array_equal([g[3] for g in got], [w[3] for w in want])
+
+
+def test_heel_strikes_of_the_foot_on_the_plate(twin, tmp_path):
+    """Both feet's strikes marked (Nexus does): the plate foot's are chosen by their context,
+    and without a choice the files are refused (the other foot's last strike, 450 ms later,
+    filed a 475 ms trial under 100 ms)."""
+    session, _, _ = twin
+    root, want = _events_export(session, tmp_path / "ev", other_foot_s=0.45)
+    with pytest.raises(
+        SessionFormatError,
+        match=r"walk_001\.c3d: 'Foot Strike' events of the contexts 'Left' and 'Right' "
+        r"\(EVENT:CONTEXTS\); say which foot's strikes time the perturbation \(the foot on the "
+        r'plate\): \[trials\] heel_strike_context = "Left" or "Right"$',
+    ):
+        import_c3d(root, _events_map(tmp_path))
+    imported = import_c3d(root, _events_map(tmp_path, '\nheel_strike_context = "Right"'))
+    np.testing.assert_array_equal([g[3] for g in _conditions(imported)], [w[3] for w in want])
+    with pytest.raises(
+        SessionFormatError,
+        match=r"a 'Dorsi' event at \S+ s but no 'Foot Strike' event of context 'right' before it",
+    ):
+        import_c3d(root, _events_map(tmp_path, '\nheel_strike_context = "right"'))
 
 
 def _edit(tmp_path, root, old, new, target="map"):

@@ -95,11 +95,16 @@ class TrialsFromCsv(Parameters):
 
 
 class TrialsFromEvents(Parameters):
-    """``[trials] source = "events"``: roles and conditions from each file's events."""
+    """``[trials] source = "events"``: roles and conditions from each file's events.
+
+    ``heel_strike_context`` (``"Right"``...) selects the heel strikes of the foot on the plate
+    by their ``EVENT:CONTEXTS``; it is needed when the files mark both feet's strikes.
+    """
 
     source: Literal["events"]
     calibration: tuple[str, ...] = ()
     heel_strike: str = Field(min_length=1)
+    heel_strike_context: str | None = Field(None, min_length=1)
     dorsi: str = Field(min_length=1)
     plantar: str = Field(min_length=1)
     timing_points_ms: tuple[float, ...] = Field(min_length=1)
@@ -186,19 +191,38 @@ def _entries_from_events(root: Path, table: TrialsFromEvents) -> list[Entry]:
     ]
 
 
+def _heel_strikes(c3d: C3DFile, table: TrialsFromEvents) -> list[float]:
+    """Times of the heel strikes of the foot on the plate, s (``heel_strike_context``)."""
+    strikes = [e for e in c3d.events if e.label == table.heel_strike]
+    if table.heel_strike_context is not None:
+        return [e.time_s for e in strikes if e.context == table.heel_strike_context]
+    contexts = sorted({e.context for e in strikes})
+    if len(contexts) > 1:
+        named = ", ".join(map(repr, contexts[:-1])) + f" and {contexts[-1]!r}"
+        choices = " or ".join(f'"{context}"' for context in contexts)
+        raise SessionFormatError(
+            f"{c3d.path}: {table.heel_strike!r} events of the contexts {named} "
+            "(EVENT:CONTEXTS); say which foot's strikes time the perturbation (the foot on the "
+            f"plate): [trials] heel_strike_context = {choices}"
+        )
+    return [e.time_s for e in strikes]
+
+
 def _event_row(c3d: C3DFile, table: TrialsFromEvents) -> dict[str, str]:
     """perturbed, direction and delay_ms of a walking file from its events."""
+    strikes = _heel_strikes(c3d, table)
     onsets = [e for e in c3d.events if e.label in (table.dorsi, table.plantar)]
     if not onsets:
         return {"perturbed": "0", "direction": "none", "delay_ms": ""}
     onset = min(onsets, key=lambda e: e.time_s)
-    strikes = [e.time_s for e in c3d.events if e.label == table.heel_strike]
     before = [t for t in strikes if t <= onset.time_s]
     if not before:
+        context = table.heel_strike_context
+        of = f" of context {context!r}" if context is not None else ""
         raise SessionFormatError(
             f"{c3d.path}: a {onset.label!r} event at {onset.time_s:g} s but no "
-            f"{table.heel_strike!r} event before it; expected the heel strike the perturbation "
-            "is timed from"
+            f"{table.heel_strike!r} event{of} before it; expected the heel strike the "
+            "perturbation is timed from"
         )
     delay = (onset.time_s - max(before)) * 1000.0
     points = np.array(table.timing_points_ms)
