@@ -63,7 +63,7 @@ def export_trial(path, recording, geometry, *, events=(), walking_axis="+y"):
     return write_c3d(
         path,
         analogs,
-        units=dict.fromkeys(labels, "N"),
+        units=dict.fromkeys(labels, "N") | {"Motor": "deg", "Gonio": "deg"},
         plates=[plate],
         per_frame=1,
         events=events,
@@ -243,6 +243,45 @@ def _edit(tmp_path, root, old, new, target="map"):
             r"cal_01\.c3d: no force platform 2; FORCE_PLATFORM:USED = 1",
         ),
         ('source = "csv"', 'source = "files"', "map", ParameterError, r"map\.toml: .*trials"),
+        (
+            'units = "deg"           # the file',
+            'units = "rad"           # the file',
+            "map",
+            ParameterError,
+            r"^\S+map\.toml: channels\.motor_angle\.units: 'rad', but \S+cal_01\.c3d gives "
+            r"'Motor' in 'deg' \(ANALOG:UNITS\); give units = \"deg\" if the file is right$",
+        ),
+        (
+            'label = "Gonio"\nunits = "deg"\n',
+            'label = "Gonio"\n',
+            "map",
+            ParameterError,
+            r"channels\.ankle_angle\.units: 'rad' \(the default\), but \S+walk_001\.c3d gives "
+            r"'Gonio' in 'deg'",
+        ),
+        (
+            'label = "Motor"',
+            'label = "Ffz1"',
+            "map",
+            ParameterError,
+            r"channels\.motor_angle\.units: 'deg', but \S+cal_01\.c3d gives 'Ffz1' in 'N' "
+            r"\(ANALOG:UNITS\): a unit of force, not of angle; is the label right\?",
+        ),
+        (
+            'units = "deg"           # the file',
+            'units = "deg"\nscale = inf  # the file',
+            "map",
+            ParameterError,
+            r"map\.toml: invalid parameters: channels\.motor_angle\.scale: Input should be a "
+            r"finite number; got inf",
+        ),
+        (
+            'units = "deg"           # the file',
+            'units = "deg"\nscale = 0.0  # the file',
+            "map",
+            ParameterError,
+            r"channels\.motor_angle\.scale: expected a finite number other than 0; got 0\.0",
+        ),
         (
             "walk_002.c3d,walking",
             "walk_999.c3d,walking",

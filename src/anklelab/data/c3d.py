@@ -42,6 +42,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from anklelab.data._isolated import IsolatedFailure, map_isolated
+from anklelab.data._units import UNITS, read_unit
 from anklelab.errors import SessionFormatError
 from anklelab.forceplate import cop_from_moment, kistler_matrix
 
@@ -58,9 +59,6 @@ __all__ = [
 ]
 
 SUPPORTED_PLATE_TYPES = (2, 3, 4)
-LENGTH_UNITS = {"m": 1.0, "cm": 1e-2, "mm": 1e-3}
-_MOMENT_UNITS = {"nm": 1.0, "n.m": 1.0, "n*m": 1.0, "n·m": 1.0, "nmm": 1e-3, "n.mm": 1e-3}
-_MOMENT_UNITS |= {"n*mm": 1e-3, "n·mm": 1e-3}
 _WORKER = Path(__file__).with_name("_c3d_worker.py")
 
 
@@ -271,14 +269,14 @@ def _text_list(path: Path, params: Mapping[str, Any], group: str, name: str) -> 
 
 def _length_scale(path: Path, params: Mapping[str, Any]) -> float:
     units = _text_list(path, params, "POINT", "UNITS")
-    unit = units[0].lower() if units else ""
-    if not unit:
+    if not units or not units[0]:
         return 1.0
-    if unit not in LENGTH_UNITS:
+    found = read_unit(units[0])
+    if found is None or found[0] != "length":
         raise SessionFormatError(
-            f"{path}: POINT:UNITS = {units[0]!r}; expected one of {', '.join(LENGTH_UNITS)}"
+            f"{path}: POINT:UNITS = {units[0]!r}; expected one of {', '.join(UNITS['length'])}"
         )
-    return LENGTH_UNITS[unit]
+    return UNITS["length"][found[1]]
 
 
 def _numbers(path: Path, params: Mapping[str, Any], name: str, shape: tuple[int, ...]) -> NDArray:
@@ -402,22 +400,23 @@ def _build(path: Path, data: Mapping[str, Any]) -> C3DFile:
 
 
 def _unit_factor(c3d: C3DFile, plate: C3DPlate, channel: int, moment: bool) -> float:
-    unit = c3d.units[channel].replace(" ", "")
+    unit = c3d.units[channel]
     label = c3d.labels[channel]
-    if not unit:
+    if not unit.strip():
         return c3d.length_scale if moment else 1.0
+    found = read_unit(unit)
     if not moment:
-        if unit.lower() == "n":
+        if found == ("force", "N"):
             return 1.0
         raise SessionFormatError(
             f"{c3d.path}: {plate.name}: channel {label!r} has ANALOG:UNITS {unit!r}; expected N"
         )
-    if unit.lower() not in _MOMENT_UNITS:
+    if found is None or found[0] != "moment":
         raise SessionFormatError(
             f"{c3d.path}: {plate.name}: channel {label!r} has ANALOG:UNITS {unit!r}; expected "
             "N·m or N·mm (Nm, Nmm)"
         )
-    return _MOMENT_UNITS[unit.lower()]
+    return UNITS["moment"][found[1]]
 
 
 def plate_wrench(

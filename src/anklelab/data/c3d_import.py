@@ -40,11 +40,13 @@ from anklelab.data._checks import check_walking_row
 from anklelab.data._mapping import (
     ColumnMap,
     SessionTable,
+    column_quantity,
     import_provenance,
     naming_the_mapping,
     read_map,
     session_info,
 )
+from anklelab.data._units import read_unit, si_unit
 from anklelab.data.c3d import C3DFile, C3DPlate, plate_load, plate_wrench, read_c3d_files
 from anklelab.data.directory import _flag, _float  # the manifest cells' rules
 from anklelab.data.session import BenchTest, Recording, Session, WalkingTrial, label_text
@@ -305,9 +307,30 @@ def _analog(c3d: C3DFile, spec: AnalogMap | None, column: str, key: str) -> NDAr
     if spec is None:
         raise ParameterError(f"channels.{column}: required for {key} trials but not mapped")
     try:
-        return spec.convert(c3d.analog(spec.label), column)
+        values = spec.convert(c3d.analog(spec.label), column)
     except ParameterError as exc:
         raise ParameterError(f"channels.{exc}") from None
+    _check_unit(c3d, spec, column)
+    return values
+
+
+def _check_unit(c3d: C3DFile, spec: AnalogMap, column: str) -> None:
+    """The mapping's unit must be the one a non-empty ``ANALOG:UNITS`` gives the channel (when
+    it is a unit of :data:`~anklelab.data._units.UNITS`; a ``V`` channel is converted by
+    ``scale``)."""
+    stored = c3d.units[c3d.labels.index(spec.label)]
+    found, quantity = read_unit(stored), column_quantity(column)
+    mapped = spec.units or (si_unit(quantity) if quantity else None)
+    if found is None or quantity is None or found == (quantity, mapped):
+        return
+    default = "" if spec.units else " (the default)"
+    head = (
+        f"channels.{column}.units: {mapped!r}{default}, but {c3d.path} gives {spec.label!r} in "
+        f"{stored!r} (ANALOG:UNITS)"
+    )
+    if found[0] == quantity:
+        raise ParameterError(f'{head}; give units = "{found[1]}" if the file is right')
+    raise ParameterError(f"{head}: a unit of {found[0]}, not of {quantity}; is the label right?")
 
 
 def _label(row: dict[str, str], path: Path) -> str:
