@@ -125,22 +125,33 @@ def test_c3d_round_trip_gives_the_native_stiffness(twin, tmp_path):
     assert imported.provenance["import"]["importer"] == "c3d"
 
 
-@pytest.mark.parametrize("kind", ["six_axis", "grf_cop"])
-def test_c3d_plate_stored_as_six_axis_or_grf_cop(twin, tmp_path, kind):
+@pytest.mark.parametrize(
+    ("kind", "min_force_n", "tolerance"),
+    [
+        # lossless
+        ("six_axis", None, 1e-3),
+        # the COP kept wherever Fz != 0 (the default): only the samples where the float32 Fz
+        # is 0 lose their moment
+        ("grf_cop", None, 3e-3),
+        # the COP empty below 10 N, as processed exports leave it: the platform's moment is
+        # not removed and the analysis says so
+        ("grf_cop", 10.0, 0.15),
+    ],
+)
+def test_c3d_plate_stored_as_six_axis_or_grf_cop(twin, tmp_path, kind, min_force_n, tolerance):
     session, root, native = twin
-    text = ('type = "kistler8"', f'type = "{kind}"')
-    imported = import_c3d(root, with_twin_delay(MAP, session, tmp_path, *text))
+    plate = f'type = "{kind}"' + ("" if min_force_n is None else f"\nmin_force_n = {min_force_n}")
+    imported = import_c3d(root, with_twin_delay(MAP, session, tmp_path, 'type = "kistler8"', plate))
     assert imported.info.force_plate.type == kind
+    blanked = min_force_n is not None
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         results = analyze_walking(imported, SETTINGS)
-    assert bool(caught) == (kind == "grf_cop")
-    # six_axis: lossless; grf_cop: the calibration COP is empty below 10 N (the mapping's
-    # min_force_n), so the platform's moment is not removed and the analysis says so
-    tolerance = 1e-3 if kind == "six_axis" else 0.15
+    assert bool(caught) == blanked
     for a, b in zip(results.timing_points, native.timing_points, strict=True):
         assert a.stiffness.mean == pytest.approx(b.stiffness.mean, rel=tolerance)
-    assert bool(results.warnings) == (kind == "grf_cop")
+        assert a.stiffness.bias_unknown == blanked
+    assert bool(results.warnings) == blanked
 
 
 def _events_map(tmp_path, extra=""):

@@ -14,8 +14,9 @@ Plate storage (``[plate] type``):
 - ``six_axis`` (types 2, 3, 4; the default for 2 and 4): Fx..Mz after ``CAL_MATRIX``, in N and
   N·m, moments about the point ``az0_m`` below the centre of the surface.
 - ``grf_cop`` (any supported type): the GRF and COP of :func:`~anklelab.data.c3d.plate_load`
-  turned into the walking frame (x along ``walking_axis``, z up), COP empty below
-  ``min_force_n``.
+  turned into the walking frame (x along ``walking_axis``, z up); the COP is empty where the
+  vertical force's magnitude is at most ``min_force_n`` (default 0: kept wherever Fz is not 0,
+  so that the calibration trials teach the platform filters the plate's own moment).
 
 For the first two, ``anterior_axis`` is the plate axis that ``CORNERS`` align with the lab's
 ``walking_axis`` (within 10°).
@@ -78,14 +79,15 @@ class ChannelsTable(Parameters):
 
 
 class PlateTable(Parameters):
-    """``[plate]``: which force platform, how the session stores it, the walking direction, and
-    how much later its channels are recorded than the angles (``delay_ms``, the amplifier's
-    anti-alias filter; ``[force_plate] delay_ms`` of ``session.toml``)."""
+    """``[plate]``: which force platform, how the session stores it, the walking direction, how
+    much later its channels are recorded than the angles (``delay_ms``, the amplifier's
+    anti-alias filter; ``[force_plate] delay_ms`` of ``session.toml``), and, for ``grf_cop``,
+    the force (N) at or below which the COP is left empty (``min_force_n``)."""
 
     number: int = Field(1, ge=1)
     type: Literal["kistler8", "six_axis", "grf_cop"] | None = None
     walking_axis: WalkingAxis
-    min_force_n: float = Field(10.0, ge=0)
+    min_force_n: float = Field(0.0, ge=0, allow_inf_nan=False)
     delay_ms: float = Field(0.0, ge=0, le=50)
 
 
