@@ -201,6 +201,26 @@ def _map(tmp_path, old, new):
             r"S07\.calibration: expected one number",
         ),
         (
+            'grf_y_n = { field = "Fy" }',
+            "grf_y_n = { value = 1e400 }",
+            ParameterError,
+            r"map\.toml: invalid parameters: columns\.grf_y_n\.value: Input should be a finite "
+            r"number; got inf$",
+        ),
+        (
+            'grf_y_n = { field = "Fy" }',
+            'grf_y_n = { value = 0, source = "assumed" }',
+            ParameterError,
+            r"map\.toml: invalid parameters: columns\.grf_y_n\.source: unknown key$",
+        ),
+        (
+            'grf_y_n = { field = "Fy" }',
+            'grf_y_n = { field = "Fy", value = 0 }',
+            ParameterError,
+            r"map\.toml: invalid parameters: columns\.grf_y_n: give either field \(where the "
+            r"values are\) or value \(a constant\), not both",
+        ),
+        (
             'layout = "matrices"\nperturbed = true',
             'layout = "matrices"\nperturbed = true\ndelay_ms = 225',
             ParameterError,
@@ -220,6 +240,17 @@ def test_malformed_maps_and_files_name_the_key_or_path(twin, tmp_path, old, new,
     _, path = twin
     with pytest.raises(error, match=message):
         import_matlab(path, _map(tmp_path, old, new))
+
+
+@pytest.mark.parametrize("constant", ["{ value = 0 }", "{ value = 0.0, scale = 2, units = 'kN' }"])
+def test_a_constant_column(tmp_path, constant):
+    """A column the file lacks, given as a constant `{ value = ... }` (lab-formats.md); the
+    calibration group maps its own."""
+    mapping = _map(tmp_path, 'grf_y_n = { field = "Fy" }', f"grf_y_n = {constant}")
+    session = import_matlab(_tiny(tmp_path), mapping)
+    for trial in session.walking:
+        assert trial.recording["grf_y_n"].shape == (300,)
+        np.testing.assert_array_equal(trial.recording["grf_y_n"], 0.0)
 
 
 def test_subjects_are_chosen_by_wildcard(twin, tmp_path):

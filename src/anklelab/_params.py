@@ -164,8 +164,9 @@ def dotted_leaves(tree: Mapping[str, Any], prefix: str = "") -> dict[str, Any]:
     return leaves
 
 
-def _split_sources(node: Any, prefix: str, sources: dict[str, str], origin: str) -> Any:
-    """Replace ``{value, source}`` leaves by their value, collecting sources by dotted key.
+def _split_sources(node: Any, prefix: str, sources: dict[str, str] | None, origin: str) -> Any:
+    """Replace ``{value, source}`` leaves by their value, collecting sources by dotted key
+    (with ``sources=None``, a document without sources: every table is kept as it is).
 
     TOML arrays become tuples (parameter objects are immutable).
     """
@@ -173,7 +174,7 @@ def _split_sources(node: Any, prefix: str, sources: dict[str, str], origin: str)
         return tuple(node)
     if not isinstance(node, dict):
         return node
-    if "value" in node and set(node) <= {"value", "source"}:
+    if sources is not None and "value" in node and set(node) <= {"value", "source"}:
         source = node.get("source", "")
         if not isinstance(source, str) or not source.startswith(SOURCE_KINDS):
             raise ParameterError(
@@ -211,16 +212,23 @@ def _describe(error: Mapping[str, Any], model: type[BaseModel]) -> str:
     return f"{key}: {error['msg']}; got {error.get('input')!r}"
 
 
-def parameters_from_mapping(model: type[P], data: Mapping[str, Any], *, origin: str) -> P:
-    """Validate a nested mapping into ``model``; errors name ``origin`` and the dotted key."""
-    sources: dict[str, str] = {}
+def parameters_from_mapping(
+    model: type[P], data: Mapping[str, Any], *, origin: str, with_sources: bool = True
+) -> P:
+    """Validate a nested mapping into ``model``; errors name ``origin`` and the dotted key.
+
+    With ``with_sources`` (parameter files), a leaf may be ``{value = ..., source = "..."}``;
+    without (documents whose own tables have a ``value`` key, such as a mapping's constant
+    column ``{ value = 0 }``), every table is validated as it is.
+    """
+    sources: dict[str, str] | None = {} if with_sources else None
     values = _split_sources(dict(data), "", sources, origin)
     try:
         params = model.model_validate(values)
     except ValidationError as exc:
         lines = "\n  ".join(_describe(err, model) for err in exc.errors())
         raise ParameterError(f"{origin}: invalid parameters:\n  {lines}") from None
-    params._sources = sources
+    params._sources = sources or {}
     return params
 
 

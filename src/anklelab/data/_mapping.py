@@ -152,7 +152,7 @@ def read_map(path: str | Path, model: type[M], fmt: str) -> M:
     if document.get("format") != fmt:
         raise ParameterError(f"{path}: format: expected {fmt!r}, got {document.get('format')!r}")
     try:
-        return parameters_from_mapping(model, document, origin=str(path))
+        return parameters_from_mapping(model, document, origin=str(path), with_sources=False)
     except ParameterError as exc:  # one line: "invalid parameters: key: ...; key: ..."
         raise ParameterError(str(exc).replace(":\n  ", ": ").replace("\n  ", "; ")) from None
 

@@ -21,7 +21,7 @@ import math
 import re
 from collections.abc import Iterator, Mapping
 from pathlib import Path
-from typing import Any, Literal
+from typing import Annotated, Any, Literal
 
 import numpy as np
 from numpy.typing import NDArray
@@ -55,12 +55,13 @@ class FieldMap(ColumnMap):
 
     field: str | None = None
     column: int | None = Field(None, ge=1)
-    value: float | None = None
+    value: Annotated[float, Field(allow_inf_nan=False)] | None = None
 
     @model_validator(mode="after")
     def _one_source(self) -> FieldMap:
         if (self.field is None) == (self.value is None):
-            raise ValueError("give either field (where the values are) or value (a constant)")
+            both = ", not both" if self.field is not None else ""
+            raise key_error(f"give either field (where the values are) or value (a constant){both}")
         return self
 
 
