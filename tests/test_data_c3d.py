@@ -9,6 +9,7 @@ import re
 import struct
 import subprocess
 import sys
+import warnings
 
 import ezc3d
 import numpy as np
@@ -152,6 +153,77 @@ def test_unsupported_type_and_missing_calibration_are_named(tmp_path):
     c.write(str(tmp_path / "t4.c3d"))
     with pytest.raises(SessionFormatError, match=r"t4\.c3d: plate 1 \(type 4\): .*CAL_MATRIX"):
         read_c3d(tmp_path / "t4.c3d")
+
+
+def _changed_plate_file(tmp_path, name, change):
+    """A type-2 plate file (z up, mm) changed by ``change`` (an ezc3d c3d object)."""
+    path, _ = write_plate_file(tmp_path / "p.c3d", 2, "z", "mm")
+    c = ezc3d.c3d(str(path))
+    change(c)
+    c.write(str(tmp_path / name))
+    return tmp_path / name
+
+
+def _set_parameter(name, values):
+    def change(c):
+        c["parameters"]["FORCE_PLATFORM"][name]["value"] = np.asarray(values, dtype=float)
+
+    return change
+
+
+def _set_analog(channel, sample, value):
+    def change(c):
+        analogs = c["data"]["analogs"]
+        analogs[0, channel, sample] = value
+        c["data"]["analogs"] = analogs
+
+    return change
+
+
+@pytest.mark.parametrize(
+    ("name", "change", "message"),
+    [
+        (
+            "origin.c3d",
+            _set_parameter("ORIGIN", [[np.nan], [0.0], [40.0]]),
+            r"origin\.c3d: plate 1 \(type 2\): FORCE_PLATFORM:ORIGIN \[nan, 0, 40\] is not "
+            r"finite; expected the vector from the plate's origin to its surface centre$",
+        ),
+        (
+            "corners.c3d",
+            _set_parameter("CORNERS", np.zeros((3, 4, 1))),
+            r"corners\.c3d: plate 1 \(type 2\): FORCE_PLATFORM:CORNERS do not span a plane "
+            r"\(corners \[\[0\.0, 0\.0, 0\.0\], ",
+        ),
+        (
+            "corners_nan.c3d",
+            _set_parameter("CORNERS", np.full((3, 4, 1), np.nan)),
+            r"corners_nan\.c3d: plate 1 \(type 2\): FORCE_PLATFORM:CORNERS do not span a plane",
+        ),
+    ],
+)
+def test_plate_geometry_errors_name_the_parameter(tmp_path, name, change, message):
+    path = _changed_plate_file(tmp_path, name, change)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # no RuntimeWarning besides the one message
+        with pytest.raises(SessionFormatError, match=message):
+            read_c3d(path)
+
+
+@pytest.mark.parametrize("value", [np.nan, np.inf])
+def test_a_plate_channel_that_is_not_finite_is_named(tmp_path, value):
+    """anklelab forceplate and import c3d stop at a NaN or infinite plate channel (never an
+    infinite cell written with RuntimeWarnings)."""
+    path = _changed_plate_file(tmp_path, "bad.c3d", _set_analog(2, 500, value))
+    c3d = read_c3d(path)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        with pytest.raises(
+            SessionFormatError,
+            match=rf"bad\.c3d: analog channel 3 'Fz', sample 501: value {value}; expected a "
+            r"finite number$",
+        ):
+            plate_load(c3d, c3d.plates[0])
 
 
 def test_malformed_files_get_one_clear_error(tmp_path, plate_files):

@@ -23,7 +23,9 @@ platform's ground reaction force, centre of pressure and free moment in the file
   channels); the COP lies on the plate surface and is NaN where the vertical force's
   magnitude is below ``min_force_n`` (a pulling force keeps its COP, where its moment
   vanishes); type 3's ``FPCOPPOLY`` COP correction is applied when present; the free
-  moment is the plate's moment on the body about the upward vertical through the COP.
+  moment is the plate's moment on the body about the upward vertical through the COP;
+- **errors**: a NaN or infinite value in a channel that is used, a non-finite ``ORIGIN`` or
+  ``CORNERS`` that do not span a plane are errors naming the file and the channel or parameter.
 
 ezc3d's C++ reader can crash or hang on a corrupt file, so files are read in worker processes
 (:mod:`anklelab.data._isolated`) after a check of the file's block structure; either failure is
@@ -184,7 +186,26 @@ class C3DFile:
         if len(found) > 1:
             at = f"{', '.join(found[:-1])} and {found[-1]}"
             raise SessionFormatError(f"{self.path}: ANALOG:LABELS has {label!r} at channels {at}")
-        return self.analogs[self.labels.index(label)]
+        return self.channel(self.labels.index(label))
+
+    def channel(self, index: int) -> NDArray[np.float64]:
+        """The analog channel ``index`` (0-based), every value finite.
+
+        Raises
+        ------
+        SessionFormatError
+            Naming the file, the channel's number and label, and the first sample (1-based)
+            that is NaN or infinite.
+        """
+        values = self.analogs[index]
+        finite = np.isfinite(values)
+        if not finite.all():
+            i = int(np.argmin(finite))
+            raise SessionFormatError(
+                f"{self.path}: analog channel {index + 1} {self.labels[index]!r}, sample "
+                f"{i + 1}: value {values[i]}; expected a finite number"
+            )
+        return values
 
     def plate(self, number: int) -> C3DPlate:
         """Force platform ``number`` (1-based)."""
@@ -342,14 +363,32 @@ def _plates(path: Path, params: Mapping[str, Any], n_analog: int, scale: float) 
             cal_matrix=cal,
             cop_poly=cop_poly,
         )
-        axes = plate.axes() if kind in SUPPORTED_PLATE_TYPES else np.eye(3)
-        if not np.all(np.isfinite(axes)) or not np.all(np.isfinite(plate.origin_m)):
-            raise SessionFormatError(
-                f"{path}: {plate.name}: FORCE_PLATFORM:CORNERS do not span a plane (corners "
-                f"{corners[:, :4, i].T.tolist()})"
-            )
+        if kind in SUPPORTED_PLATE_TYPES:
+            _check_geometry(path, plate, origin[:, i], corners[:, :4, i].T)
         plates.append(plate)
     return plates
+
+
+def _check_geometry(
+    path: Path, plate: C3DPlate, origin: NDArray[np.float64], corners: NDArray[np.float64]
+) -> None:
+    """``ORIGIN`` finite and ``CORNERS`` spanning a plane (as the file gives them, for the
+    message), checked before anything is divided by their lengths."""
+    if not np.all(np.isfinite(origin)):
+        raise SessionFormatError(
+            f"{path}: {plate.name}: FORCE_PLATFORM:ORIGIN [{', '.join(f'{v:g}' for v in origin)}] "
+            "is not finite; expected the vector from the plate's origin to its surface centre"
+        )
+    c = plate.corners_m
+    x, y = c[0] - c[1], c[0] - c[3]
+    with np.errstate(invalid="ignore", over="ignore"):
+        area = float(np.linalg.norm(np.cross(x, y)))
+        side = float(np.linalg.norm(x) * np.linalg.norm(y))
+    if not (np.all(np.isfinite(c)) and side > 0 and area > 1e-9 * side):
+        raise SessionFormatError(
+            f"{path}: {plate.name}: FORCE_PLATFORM:CORNERS do not span a plane (corners "
+            f"{corners.tolist()})"
+        )
 
 
 def _events(path: Path, params: Mapping[str, Any]) -> list[C3DEvent]:
@@ -443,7 +482,7 @@ def plate_wrench(
             f"{c3d.path}: {plate.name}: unsupported force-platform type {plate.type}; "
             f"expected type {', '.join(map(str, SUPPORTED_PLATE_TYPES))}"
         )
-    raw = c3d.analogs[list(plate.channels)]
+    raw = np.stack([c3d.channel(k) for k in plate.channels])
     origin = plate.origin_m
     if plate.type == 3:
         a, b, az0 = abs(origin[0]), abs(origin[1]), -abs(origin[2])
