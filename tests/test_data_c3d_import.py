@@ -11,6 +11,7 @@ import sys
 import warnings
 from pathlib import Path
 
+import ezc3d
 import numpy as np
 import pytest
 
@@ -320,6 +321,97 @@ def test_malformed_mapping_or_trial_list_is_named(twin, tmp_path, old, new, targ
     _, root, _ = twin
     directory, mapping = _edit(tmp_path, root, old, new, target)
     with pytest.raises(error, match=message):
+        import_c3d(directory, mapping)
+
+
+def _with_changed_file(tmp_path, root, name, change):
+    """A copy of the C3D directory (links) whose file ``name`` is changed by ``change`` (an
+    ezc3d c3d object)."""
+    copy = tmp_path / "changed"
+    copy.mkdir()
+    for p in root.iterdir():
+        if p.name not in (name, "trials.csv"):
+            (copy / p.name).symlink_to(p)
+    (copy / "trials.csv").write_text((root / "trials.csv").read_text())
+    c = ezc3d.c3d(str(root / name))
+    change(c)
+    c.write(str(copy / name))
+    return copy
+
+
+def _analog_nan(label, sample):
+    def change(c):
+        analogs = c["data"]["analogs"]
+        analogs[0, list(c["parameters"]["ANALOG"]["LABELS"]["value"]).index(label), sample] = np.nan
+        c["data"]["analogs"] = analogs
+
+    return change
+
+
+def _origin_x(value):
+    def change(c):
+        origin = np.array(c["parameters"]["FORCE_PLATFORM"]["ORIGIN"]["value"], dtype=float)
+        origin[0] = value
+        c["parameters"]["FORCE_PLATFORM"]["ORIGIN"]["value"] = origin
+
+    return change
+
+
+@pytest.mark.parametrize(
+    ("change", "message"),
+    [
+        (
+            _analog_nan("Motor", 300),
+            r"walk_006\.c3d: analog channel 9 'Motor', sample 301: value nan; expected a finite "
+            r"number$",
+        ),
+        (
+            _analog_nan("Ffz2", 300),
+            r"walk_006\.c3d: analog channel 6 'Ffz2', sample 301: value nan; expected a finite "
+            r"number$",
+        ),
+        (
+            _origin_x(150.0),
+            r"walk_006\.c3d: plate 1 has a_m = 0\.15 \(cal_01\.c3d: 0\.12\); expected the same "
+            r"plate in every file$",
+        ),
+    ],
+)
+def test_bad_channels_and_plates_name_the_c3d_file(twin, tmp_path, change, message):
+    _, root, _ = twin
+    with pytest.raises(SessionFormatError, match=message):
+        import_c3d(_with_changed_file(tmp_path, root, "walk_006.c3d", change), MAP)
+
+
+@pytest.mark.parametrize(
+    ("edits", "message"),
+    [
+        (
+            [("walk_003.c3d,walking,S03_p100_3", "walk_003.c3d,walking,S03_p350_2")],
+            r"trials\.csv: line 6, column 'label': 'S03_p350_2' is already the label of line 5$",
+        ),
+        (
+            [
+                ("walk_001.c3d,walking,S03_d225_1", "walk_001.c3d,walking,walk_003"),
+                ("walk_003.c3d,walking,S03_p100_3", "walk_003.c3d,walking,"),
+            ],
+            r"trials\.csv: line 6, column 'label': 'walk_003' \(the file name, as the label is "
+            r"empty\) is already the label of line 4$",
+        ),
+        (
+            [(",", ";")],
+            r"trials\.csv: line 1 is separated by semicolons \('file;role;label;perturbed;"
+            r"direction;delay_ms'\); expected a comma-separated CSV$",
+        ),
+    ],
+)
+def test_trial_list_errors_name_the_line(twin, tmp_path, edits, message):
+    _, root, _ = twin
+    directory, mapping = _edit(tmp_path, root, *edits[0], "csv")
+    for old, new in edits[1:]:
+        listed = directory / "trials.csv"
+        listed.write_text(listed.read_text().replace(old, new))
+    with pytest.raises(SessionFormatError, match=message):
         import_c3d(directory, mapping)
 
 

@@ -38,6 +38,7 @@ from pydantic import Field
 
 from anklelab._params import Parameters
 from anklelab.data._checks import check_walking_row
+from anklelab.data._files import MAX_MANIFEST_BYTES, read_bytes
 from anklelab.data._mapping import (
     ColumnMap,
     SessionTable,
@@ -47,6 +48,7 @@ from anklelab.data._mapping import (
     read_map,
     session_info,
 )
+from anklelab.data._text import excerpt
 from anklelab.data._units import read_unit, si_unit
 from anklelab.data.c3d import C3DFile, C3DPlate, plate_load, plate_wrench, read_c3d_files
 from anklelab.data.directory import _flag, _float  # the manifest cells' rules
@@ -139,21 +141,27 @@ def _entries_from_csv(root: Path, table: TrialsFromCsv) -> list[Entry]:
         raise ParameterError(f"trials.file: expected a file name inside {root}, got {name!r}")
     path = root / name
     try:
-        text = path.read_text(encoding="utf-8-sig")
-    except (FileNotFoundError, IsADirectoryError):
-        raise SessionFormatError(f"{path}: trial list not found") from None
+        text = read_bytes(path, root, MAX_MANIFEST_BYTES, "a CSV trial list").decode("utf-8-sig")
     except UnicodeDecodeError:
         raise SessionFormatError(f"{path}: not UTF-8 text; expected a CSV trial list") from None
     rows = list(csv.reader(io.StringIO(text)))
     header = [h.strip() for h in rows[0]] if rows else []
     for column in ("file", "role"):
-        if column not in header:
+        if column in header:
+            continue
+        first = text.splitlines()[0] if text else ""
+        if ";" in first and "," not in first:
             raise SessionFormatError(
-                f"{path}: header (line 1) lacks the column {column!r}; expected file, role and "
-                "(walking) perturbed, direction, delay_ms, (bench) distance_m, optionally label"
+                f"{path}: line 1 is separated by semicolons ({excerpt(first, 80)}); expected a "
+                "comma-separated CSV"
             )
+        raise SessionFormatError(
+            f"{path}: header (line 1) lacks the column {column!r}; expected file, role and "
+            "(walking) perturbed, direction, delay_ms, (bench) distance_m, optionally label"
+        )
     entries = []
     seen: dict[str, int] = {}
+    labels: dict[tuple[str, str], int] = {}  # (role, label): line
     for line, fields in enumerate(rows[1:], start=2):
         if not any(f.strip() for f in fields):
             continue
@@ -173,6 +181,15 @@ def _entries_from_csv(root: Path, table: TrialsFromCsv) -> list[Entry]:
         if file in seen:
             raise SessionFormatError(f"{where}: file {file!r} already listed at line {seen[file]}")
         seen[file] = line
+        if row["role"] != "calibration":  # walking trials and bench tests are labelled
+            label = row.get("label") or Path(file).stem
+            if (row["role"], label) in labels:
+                default = "" if row.get("label") else " (the file name, as the label is empty)"
+                raise SessionFormatError(
+                    f"{where}, column 'label': {excerpt(label)}{default} is already the label of "
+                    f"line {labels[row['role'], label]}"
+                )
+            labels[row["role"], label] = line
         entries.append((row["role"], root / file, row | {"_where": where}))
     if not entries:
         raise SessionFormatError(f"{path}: no rows after the header; expected one row per file")
@@ -289,8 +306,8 @@ def _plate_columns(
                 f"plate.type: 'kistler8' needs a C3D type-3 plate; {c3d.path} has "
                 f"{plate.name} (use 'six_axis' or 'grf_cop')"
             )
-        origin = plate.origin_m
-        geometry = {"a_m": abs(origin[0]), "b_m": abs(origin[1]), "az0_m": -abs(origin[2])}
+        a, b, az0 = (float(v) for v in plate.origin_m)
+        geometry = {"a_m": abs(a), "b_m": abs(b), "az0_m": -abs(az0)}
         channels = c3d.analogs[list(plate.channels)]
         columns = dict(zip(CHANNELS, channels, strict=True))
         return columns, {"type": "kistler8", **geometry, "anterior_axis": anterior}
@@ -433,7 +450,8 @@ def _import(
     first = files[0]
     rate = first.analog_rate_hz
     kind = spec.plate.type or {3: "kistler8"}.get(first.plate(spec.plate.number).type, "six_axis")
-    plate_table: dict[str, object] | None = None
+    plate_table: dict[str, object] | None = None  # and the file it is from:
+    plate_file = ""
     calibration: list[Recording] = []
     walking: list[WalkingTrial] = []
     bench: list[BenchTest] = []
@@ -459,11 +477,14 @@ def _import(
             columns["ankle_angle"] = _analog(c3d, spec.channels.ankle_angle, "ankle_angle", role)
         plate_columns, table = _plate_columns(c3d, spec.plate, kind)
         if plate_table is None:
-            plate_table = table
-        elif kind != "grf_cop" and not _same_plate(table, plate_table):
+            plate_table, plate_file = table, path.name
+        elif kind != "grf_cop" and (differences := _plate_differences(table, plate_table)):
+            shown = "; ".join(
+                f"{key} = {ours} ({plate_file}: {theirs})" for key, ours, theirs in differences
+            )
             raise SessionFormatError(
-                f"{path}: plate {spec.plate.number} is {table}; expected the same plate as in "
-                f"{first.path.name} ({plate_table})"
+                f"{path}: plate {spec.plate.number} has {shown}; expected the same plate in "
+                "every file"
             )
         recording = Recording(f"{path.stem}.csv", columns | plate_columns)
         if role == "calibration":
@@ -487,12 +508,23 @@ def _import(
     return Session(info, tuple(calibration), tuple(walking), tuple(bench), None, provenance)
 
 
-def _same_plate(a: dict[str, object], b: dict[str, object]) -> bool:
-    return a.keys() == b.keys() and all(_same_value(a[k], b[k]) for k in a)
+def _plate_differences(
+    table: dict[str, object], first: dict[str, object]
+) -> list[tuple[str, str, str]]:
+    """(key, value, value in the first file) where two plate tables differ; floats (a plate's
+    geometry, m) within 1e-6 of each other are the same."""
+    return [
+        (key, _shown(table.get(key)), _shown(first.get(key)))
+        for key in sorted(table.keys() | first.keys())
+        if not _same_value(table.get(key), first.get(key))
+    ]
+
+
+def _shown(value: object) -> str:
+    return f"{value:.6g}" if isinstance(value, float) else str(value)
 
 
 def _same_value(x: object, y: object) -> bool:
-    """Equal; two floats (a plate's geometry, m) within 1e-6 of each other."""
     if isinstance(x, float) and isinstance(y, float):
         return bool(np.isclose(x, y, atol=1e-6))
     return x == y
