@@ -69,8 +69,13 @@ def test_c3d_tree_lists_channels_plates_and_parameters(tmp_path):
 
 
 def test_inspect_errors(tmp_path):
-    with pytest.raises(SessionFormatError, match=r"nope\.mat: no such file"):
+    expected = r"expected a \.mat, \.c3d or HDF5 file$"
+    with pytest.raises(SessionFormatError, match=rf"nope\.mat: does not exist; {expected}"):
         inspect_file(tmp_path / "nope.mat")
+    with pytest.raises(
+        SessionFormatError, match=rf"\S+: is a directory, not a regular file; {expected}"
+    ):
+        inspect_file(tmp_path)
     (tmp_path / "x.h5").write_bytes(b"not hdf5")
     with pytest.raises(SessionFormatError, match=r"x\.h5: cannot open as HDF5"):
         inspect_file(tmp_path / "x.h5")

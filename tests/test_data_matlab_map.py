@@ -253,6 +253,83 @@ def test_a_constant_column(tmp_path, constant):
         np.testing.assert_array_equal(trial.recording["grf_y_n"], 0.0)
 
 
+def _tiny_with(tmp_path, change):
+    """The tiny layout with ``change`` applied to its walking fields (t225 and control)."""
+    root = scipy.io.loadmat(_tiny(tmp_path), simplify_cells=True)["S01"]
+    change(root)
+    path = tmp_path / "changed.mat"
+    scipy.io.savemat(path, {"S01": root})
+    return path
+
+
+def _set(where, value):
+    def change(root):
+        node = root
+        for key in where[:-1]:
+            node = node[key]
+        node[where[-1][0]][where[-1][1:]] = value
+
+    return change
+
+
+@pytest.mark.parametrize(
+    ("where", "value", "message"),
+    [
+        (
+            ("dorsiflexion", "t225", ("angle", 100, 0)),
+            np.nan,
+            r"changed\.mat: S01\.dorsiflexion\.t225\(1\)\.angle: sample 101: value nan; expected "
+            r"a finite number \(mapped to column 'motor_angle'\)$",
+        ),
+        (
+            ("control", ("CoPx", 7, 1)),
+            np.inf,
+            r"changed\.mat: S01\.control\(2\)\.CoPx: sample 8: value inf; expected a finite number "
+            r"or NaN \(mapped to column 'cop_x_m'\)$",
+        ),
+        (
+            ("calibration", ("GRF", 11, 2)),
+            np.nan,
+            r"changed\.mat: S01\.calibration\(1\)\.GRF\(:, 3\): sample 12: value nan; expected a "
+            r"finite number \(mapped to column 'grf_z_n'\)$",
+        ),
+    ],
+)
+def test_values_that_are_not_finite_are_named_by_struct_path(tmp_path, where, value, message):
+    with pytest.raises(SessionFormatError, match=message):
+        import_matlab(_tiny_with(tmp_path, _set(where, value)), MAP)
+
+
+def test_an_empty_cop_is_read_as_nan(tmp_path):
+    """grf_cop: the COP may be empty (NaN) where the plate carries too little."""
+    session = import_matlab(_tiny_with(tmp_path, _set(("control", ("CoPx", 7, 1)), np.nan)), MAP)
+    trial = next(w for w in session.walking if w.trial == "S01.control(2)")
+    assert np.isnan(trial.recording["cop_x_m"][7]) and np.isfinite(trial.recording["grf_x_n"]).all()
+
+
+def test_a_directory_is_named_as_one(tmp_path):
+    with pytest.raises(
+        SessionFormatError,
+        match=r"\S+: is a directory, not a regular file; expected a MATLAB \.mat file$",
+    ):
+        import_matlab(tmp_path, MAP)
+    with pytest.raises(ParameterError, match=r"\S+: a directory; expected a mapping file$"):
+        import_matlab(_tiny(tmp_path), tmp_path)
+
+
+def test_a_key_under_the_wrong_table_gets_no_false_hint(tmp_path):
+    """`walking = []` written after [[calibration]] belongs to that table (TOML)."""
+    text = MAP.read_text()
+    mapping = tmp_path / "map.toml"
+    mapping.write_text(text[: text.index("[[walking]]")] + "walking = []\n")
+    with pytest.raises(
+        ParameterError,
+        match=r"map\.toml: invalid parameters: calibration\.0\.walking: unknown key; walking: "
+        r"required key is missing$",
+    ):
+        import_matlab(_tiny(tmp_path), mapping)
+
+
 def test_subjects_are_chosen_by_wildcard(twin, tmp_path):
     session, _ = twin
     small = type(session)(session.info, session.calibration[:1], session.walking[:12], (), None, {})

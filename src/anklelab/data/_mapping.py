@@ -11,7 +11,6 @@ for ``*_m`` columns, forces for ``*_n`` and the force channels, moments for ``mx
 from __future__ import annotations
 
 import hashlib
-import tomllib
 from collections.abc import Iterator, Mapping, Sequence
 from contextlib import contextmanager
 from pathlib import Path
@@ -22,7 +21,7 @@ from numpy.typing import ArrayLike, NDArray
 from pydantic import AfterValidator, Field, model_validator
 from pydantic_core import PydanticCustomError
 
-from anklelab._params import Parameters, parameters_from_mapping
+from anklelab._params import Parameters, parameters_from_mapping, read_parameter_document
 from anklelab.data._checks import info_from_mapping
 from anklelab.data._units import UNITS
 from anklelab.data.session import SessionInfo
@@ -90,7 +89,8 @@ class ColumnMap(Parameters):
     def convert(self, values: ArrayLike, column: str) -> NDArray[np.float64]:
         """``values`` in the SI unit of ``column``."""
         factor = self.factor(column) * self.scale * (-1.0 if self.flip else 1.0)
-        return np.asarray(values, dtype=np.float64) * factor
+        with np.errstate(over="ignore"):  # an overflow is an infinite value, refused by name
+            return np.asarray(values, dtype=np.float64) * factor
 
     def factor(self, column: str) -> float:
         """The unit's factor to the SI unit of ``column`` (1 when no unit is given)."""
@@ -143,12 +143,7 @@ def read_map(path: str | Path, model: type[M], fmt: str) -> M:
         Naming the file and the dotted key (unknown keys get a "did you mean" hint).
     """
     path = Path(path)
-    try:
-        document = tomllib.loads(path.read_text(encoding="utf-8"))
-    except FileNotFoundError:
-        raise ParameterError(f"{path}: mapping file not found") from None
-    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
-        raise ParameterError(f"{path}: not valid TOML: {exc}") from None
+    document = read_parameter_document(path, "toml", what="mapping file")
     if document.get("format") != fmt:
         raise ParameterError(f"{path}: format: expected {fmt!r}, got {document.get('format')!r}")
     try:

@@ -18,6 +18,7 @@ from typing import Any
 
 import numpy as np
 
+from anklelab.data._files import not_a_file
 from anklelab.errors import SessionFormatError
 
 __all__ = ["inspect_file"]
@@ -162,8 +163,8 @@ def inspect_file(path: str | Path) -> list[str]:
         The file is missing or cannot be read as its kind.
     """
     path = Path(path)
-    if not path.is_file():
-        raise SessionFormatError(f"{path}: no such file")
+    if problem := not_a_file(path):
+        raise SessionFormatError(f"{path}: {problem}; expected a .mat, .c3d or HDF5 file")
     suffix = path.suffix.lower()
     reader = {".mat": _matlab, ".c3d": _c3d}.get(suffix, _hdf5)
     return list(reader(path))

@@ -53,6 +53,7 @@ from anklelab.data._checks import (
     excerpt,
     info_from_mapping,
 )
+from anklelab.data._files import not_a_file
 from anklelab.data._h5safe import H5_ERRORS, check_h5_file, damaged, open_h5
 from anklelab.data._progress import Progress, ticker
 from anklelab.data.session import (
@@ -319,8 +320,8 @@ def read_matlab(path: str | Path, *, progress: Progress | None = None) -> Sessio
         Naming the file and the MATLAB field (``session.walking(3).delay_ms``).
     """
     path = Path(path)
-    if not path.is_file():
-        raise SessionFormatError(f"{path}: file not found")
+    if problem := not_a_file(path):
+        raise SessionFormatError(f"{path}: {problem}; expected a MATLAB .mat file")
     root = _load(path, "session")["session"]
     if not isinstance(root, dict):
         raise SessionFormatError(f"{path}: session: expected a scalar struct")

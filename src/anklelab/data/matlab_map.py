@@ -28,7 +28,8 @@ from numpy.typing import NDArray
 from pydantic import Field, ValidationInfo, field_validator, model_validator
 
 from anklelab._params import Parameters
-from anklelab.data._checks import check_walking_row
+from anklelab.data._checks import check_recording, check_walking_row
+from anklelab.data._files import not_a_file
 from anklelab.data._mapping import (
     ColumnMap,
     SessionTable,
@@ -260,7 +261,11 @@ def _recording(
     fs: float,
     where: str,
     name: str,
+    nullable: tuple[str, ...],
 ) -> Recording:
+    """One trial's recording, its NaN padding removed and checked: values finite (NaN allowed
+    in the ``nullable`` columns: an empty COP), time increasing at ``fs``; errors name the
+    struct path of the field."""
     for column in required:
         if column not in specs and column != "time_s":
             raise ParameterError(f"columns.{column}: required column is not mapped")
@@ -280,7 +285,25 @@ def _recording(
         for c, v in values.items()
     }
     columns.setdefault("time_s", np.arange(n) / fs)
-    return Recording(name, {"time_s": columns.pop("time_s"), **columns})
+    for column, spec in specs.items():
+        _check_finite(columns[column], spec, column, where, column in nullable)
+    columns = {"time_s": columns.pop("time_s"), **columns}
+    check_recording(where, columns, required, fs, nullable=nullable)
+    return Recording(name, columns)
+
+
+def _check_finite(
+    values: NDArray[np.float64], spec: FieldMap, column: str, where: str, nullable: bool
+) -> None:
+    finite = np.isfinite(values) | (np.isnan(values) if nullable else False)
+    if spec.field is None or finite.all():
+        return
+    i = int(np.argmin(finite))
+    part = f"(:, {spec.column})" if spec.column is not None else ""
+    raise SessionFormatError(
+        f"{where}.{spec.field}{part}: sample {i + 1}: value {float(values[i])}; expected a "
+        f"finite number{' or NaN' if nullable else ''} (mapped to column {column!r})"
+    )
 
 
 def _file_name(label: str) -> str:
@@ -323,8 +346,8 @@ def import_matlab(path: str | Path, mapping: str | Path, *, subject: str | None 
         A file that does not hold what the mapping says (naming the file and the MATLAB path).
     """
     path, mapping = Path(path), Path(mapping)
-    if not path.is_file():
-        raise SessionFormatError(f"{path}: file not found")
+    if problem := not_a_file(path):
+        raise SessionFormatError(f"{path}: {problem}; expected a MATLAB .mat file")
     spec = read_map(mapping, MatlabMapping, MATLAB_MAP_FORMAT)
     with naming_the_mapping(mapping):
         return _import(path, mapping, spec, subject)
@@ -371,7 +394,9 @@ def _import(path: Path, mapping: Path, spec: MatlabMapping, subject: str | None)
         for index, fields in _trials(value, group, specs, where):
             label = f"{resolved}{index}"
             trial_where = f"{where}{index}"
-            rec = _recording(fields, specs, required, rate, trial_where, _file_name(label))
+            rec = _recording(
+                fields, specs, required, rate, trial_where, _file_name(label), plate_model.nullable
+            )
             if rec.name in labels:
                 raise SessionFormatError(
                     f"{where}{index}: file name {rec.name} clashes with {labels[rec.name]}"
