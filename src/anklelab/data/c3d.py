@@ -35,10 +35,10 @@ a :class:`~anklelab.errors.SessionFormatError` naming the file.
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import Any, TypeVar
 
 import numpy as np
 from numpy.typing import NDArray
@@ -62,6 +62,7 @@ __all__ = [
 
 SUPPORTED_PLATE_TYPES = (2, 3, 4)
 _WORKER = Path(__file__).with_name("_c3d_worker.py")
+T = TypeVar("T")
 
 
 @dataclass(frozen=True)
@@ -142,6 +143,9 @@ class C3DFile:
     events : tuple of C3DEvent
     parameters : mapping
         Every parameter, ``{group: {name: value}}`` (text as lists of str, numbers as arrays).
+    problems : tuple of str
+        What a lenient read (:func:`read_c3d_files`) could not interpret and left out (then
+        ``length_scale`` may be NaN: ``POINT:UNITS`` unknown).
     """
 
     path: Path
@@ -155,6 +159,7 @@ class C3DFile:
     plates: tuple[C3DPlate, ...] = ()
     events: tuple[C3DEvent, ...] = ()
     parameters: Mapping[str, Mapping[str, Any]] = field(default_factory=dict)
+    problems: tuple[str, ...] = ()
 
     @property
     def n_samples(self) -> int:
@@ -238,14 +243,27 @@ def _timeout(path: Path) -> float:
     return 30.0 + size / 1e6  # ezc3d reads ~50 MB/s; a hang is far beyond this
 
 
-def read_c3d_files(paths: Sequence[str | Path], *, workers: int = 2) -> list[C3DFile]:
+def read_c3d_files(
+    paths: Sequence[str | Path], *, workers: int = 2, lenient: bool = False
+) -> list[C3DFile]:
     """Read C3D files (in worker processes; see the module docstring).
+
+    Parameters
+    ----------
+    paths : sequence of str or Path
+        The files.
+    workers : int
+        Worker processes reading them.
+    lenient : bool
+        Note what keeps a file's parameters from being read (the analog rate, ``POINT:UNITS``,
+        the force platforms, the events) in :attr:`C3DFile.problems` instead of raising, and
+        leave out what it concerns (``anklelab inspect`` shows such files).
 
     Raises
     ------
     SessionFormatError
         Naming the file and the parameter for the first file that is missing, malformed or
-        describes its force platforms inconsistently.
+        (unless ``lenient``) describes its force platforms inconsistently.
     """
     files = [Path(p) for p in paths]
     for path in files:
@@ -259,12 +277,15 @@ def read_c3d_files(paths: Sequence[str | Path], *, workers: int = 2) -> list[C3D
         ) from None
     except ValueError as exc:  # the worker's report of a malformed file
         raise SessionFormatError(str(exc)) from None
-    return [_build(path, data) for path, data in zip(files, loaded, strict=True)]
+    return [
+        _build(path, data, [] if lenient else None)
+        for path, data in zip(files, loaded, strict=True)
+    ]
 
 
-def read_c3d(path: str | Path) -> C3DFile:
+def read_c3d(path: str | Path, *, lenient: bool = False) -> C3DFile:
     """Read one C3D file (see :func:`read_c3d_files`)."""
-    return read_c3d_files([path], workers=1)[0]
+    return read_c3d_files([path], workers=1, lenient=lenient)[0]
 
 
 # --- interpreting the parameters ------------------------------------------------------------------
@@ -409,17 +430,36 @@ def _events(path: Path, params: Mapping[str, Any]) -> list[C3DEvent]:
     ]
 
 
-def _build(path: Path, data: Mapping[str, Any]) -> C3DFile:
+def _check_rate(path: Path, rate: float, n_channels: int) -> None:
+    if n_channels and not (math.isfinite(rate) and rate > 0):
+        raise SessionFormatError(f"{path}: analog rate {rate!r} Hz; expected a rate > 0")
+
+
+def _build(path: Path, data: Mapping[str, Any], problems: list[str] | None = None) -> C3DFile:
+    """The file's contents interpreted; with ``problems``, a parameter that cannot be read is
+    noted there (the file's name left out) and what it concerns left out, instead of raised."""
+
+    def noted(read: Callable[[], T], fallback: T) -> T:
+        if problems is None:
+            return read()
+        try:
+            return read()
+        except SessionFormatError as exc:
+            problems.append(str(exc).removeprefix(f"{path}: "))
+            return fallback
+
     params = data["parameters"]
     analogs = data["analogs"]
     rate = data["analog_rate_hz"]
-    if analogs.shape[0] and not (math.isfinite(rate) and rate > 0):
-        raise SessionFormatError(f"{path}: analog rate {rate!r} Hz; expected a rate > 0")
+    noted(lambda: _check_rate(path, rate, analogs.shape[0]), None)
     labels = _text_list(path, params, "ANALOG", "LABELS")[: analogs.shape[0]]
     labels += [f"channel_{i + 1}" for i in range(len(labels), analogs.shape[0])]
     units = _text_list(path, params, "ANALOG", "UNITS")[: analogs.shape[0]]
     units += [""] * (analogs.shape[0] - len(units))
-    scale = _length_scale(path, params)
+    scale = noted(lambda: _length_scale(path, params), math.nan)
+    plates: list[C3DPlate] = []
+    if math.isfinite(scale):  # else the plates' lengths are in an unknown unit
+        plates = noted(lambda: _plates(path, params, analogs.shape[0], scale), [])
     return C3DFile(
         path=path,
         analog_rate_hz=rate,
@@ -429,9 +469,10 @@ def _build(path: Path, data: Mapping[str, Any]) -> C3DFile:
         units=tuple(units),
         analogs=analogs,
         length_scale=scale,
-        plates=tuple(_plates(path, params, analogs.shape[0], scale)),
-        events=tuple(_events(path, params)),
+        plates=tuple(plates),
+        events=tuple(noted(lambda: _events(path, params), [])),
         parameters=params,
+        problems=tuple(problems or ()),
     )
 
 
