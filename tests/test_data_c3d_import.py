@@ -189,6 +189,35 @@ def test_trial_roles_from_events(twin, tmp_path):
     np.testing.assert_array_equal([g[3] for g in got], [w[3] for w in want])
 
 
+def test_events_take_every_c3d_file_and_name_the_role_of_one_that_is_no_trial(twin, tmp_path):
+    """A file ending in .C3D is a trial too; a bench test in the directory is named as one
+    (it is no walking trial: it has no motor channel and no plate) until it is ignored."""
+    session, _, _ = twin
+    root, want = _events_export(session, tmp_path / "ev")
+    (root / "walk_012.c3d").rename(root / "walk_012.C3D")
+    (root / "cal_02.c3d").rename(root / "cal_02.C3D")
+    t = np.arange(500) / 1000.0
+    write_c3d(root / "bench_01.c3d", {"Disp": t, "Load": t}, per_frame=1)
+    bench_map = (
+        '\n[channels.displacement_m]\nlabel = "Disp"\n\n[channels.force_n]\nlabel = "Load"\n'
+    )
+    mapping = _events_map(tmp_path)
+    text = mapping.read_text().replace("\n[trials]", bench_map + "\n[trials]")
+    mapping.write_text(text)
+    with pytest.raises(
+        SessionFormatError,
+        match=r"bench_01\.c3d: taken for a walking trial \(\[trials\] source = \"events\": it "
+        r"matches no calibration or ignore pattern\), but it has no analog channel 'Motor', "
+        r"'Gonio' and no force platform 1: it looks like a bench test \(it has 'Disp', 'Load'\); "
+        r"list it in \[trials\] ignore, or list the trials in a CSV \(source = \"csv\"\)$",
+    ):
+        import_c3d(root, mapping)
+    mapping.write_text(text + 'ignore = ["bench_*.c3d"]\n')
+    imported = import_c3d(root, mapping)
+    assert len(imported.calibration) == 2
+    assert [g[:3] for g in _conditions(imported)] == [w[:3] for w in want]
+
+
 def test_heel_strikes_of_the_foot_on_the_plate(twin, tmp_path):
     """Both feet's strikes marked (Nexus does): the plate foot's are chosen by their context,
     and without a choice the files are refused (the other foot's last strike, 450 ms later,

@@ -103,12 +103,16 @@ class TrialsFromCsv(Parameters):
 class TrialsFromEvents(Parameters):
     """``[trials] source = "events"``: roles and conditions from each file's events.
 
+    Every ``.c3d`` file of the directory (any case) is a trial: a calibration trial if its name
+    matches a ``calibration`` pattern, none if it matches an ``ignore`` pattern (a static or a
+    bench trial), else a walking trial; patterns are matched without regard to case.
     ``heel_strike_context`` (``"Right"``...) selects the heel strikes of the foot on the plate
     by their ``EVENT:CONTEXTS``; it is needed when the files mark both feet's strikes.
     """
 
     source: Literal["events"]
     calibration: tuple[str, ...] = ()
+    ignore: tuple[str, ...] = ()
     heel_strike: str = Field(min_length=1)
     heel_strike_context: str | None = Field(None, min_length=1)
     dorsi: str = Field(min_length=1)
@@ -196,20 +200,50 @@ def _entries_from_csv(root: Path, table: TrialsFromCsv) -> list[Entry]:
     return entries
 
 
+def _matches(name: str, patterns: tuple[str, ...]) -> bool:
+    return any(fnmatch.fnmatchcase(name.casefold(), g.casefold()) for g in patterns)
+
+
 def _entries_from_events(root: Path, table: TrialsFromEvents) -> list[Entry]:
-    files = sorted(root.glob("*.c3d"), key=_natural)
+    files = sorted((p for p in root.iterdir() if p.suffix.casefold() == ".c3d"), key=_natural)
+    stems: dict[str, Path] = {}
+    for path in files:
+        if (other := stems.setdefault(path.stem.casefold(), path)) is not path:
+            raise SessionFormatError(
+                f"{path}: the same trial name as {other.name} but for case; rename one (trial "
+                "labels are the file names)"
+            )
+    files = [p for p in files if not _matches(p.name, table.ignore)]
     if not files:
-        raise SessionFormatError(f"{root}: no .c3d files")
+        raise SessionFormatError(f"{root}: no .c3d files besides those [trials] ignore matches")
     return [
-        (
-            "calibration"
-            if any(fnmatch.fnmatch(p.name, g) for g in table.calibration)
-            else "walking",
-            p,
-            {"_where": str(p)},
-        )
+        ("calibration" if _matches(p.name, table.calibration) else "walking", p, {"_where": str(p)})
         for p in files
     ]
+
+
+def _check_role(c3d: C3DFile, spec: C3DMapping, role: str) -> None:
+    """A file the events took for a calibration or walking trial must have the channels and the
+    plate of one; else it is named with what it looks like (a bench, static... trial)."""
+    channels = spec.channels
+    wanted = [channels.motor_angle] + ([channels.ankle_angle] if role == "walking" else [])
+    missing = [m.label for m in wanted if m is not None and m.label not in c3d.labels]
+    lacks = [f"analog channel {', '.join(map(repr, missing))}"] if missing else []
+    if len(c3d.plates) < spec.plate.number:
+        lacks.append(f"force platform {spec.plate.number}")
+    if not lacks:
+        return
+    bench = [m.label for m in (channels.displacement_m, channels.force_n) if m is not None]
+    if bench and all(label in c3d.labels for label in bench):
+        looks = f"a bench test (it has {', '.join(map(repr, bench))})"
+    else:
+        looks = "a static or bench trial"
+    why = "a" if role == "calibration" else "no calibration or ignore"
+    raise SessionFormatError(
+        f'{c3d.path}: taken for a {role} trial ([trials] source = "events": it matches {why} '
+        f"pattern), but it has no {' and no '.join(lacks)}: it looks like {looks}; list it in "
+        '[trials] ignore, or list the trials in a CSV (source = "csv")'
+    )
 
 
 def _heel_strikes(c3d: C3DFile, table: TrialsFromEvents) -> list[float]:
@@ -461,6 +495,8 @@ def _import(
                 f"{path}: analog rate {c3d.analog_rate_hz:g} Hz; expected {rate:g} Hz like "
                 f"{first.path.name} (one sample rate per session)"
             )
+        if isinstance(spec.trials, TrialsFromEvents):
+            _check_role(c3d, spec, role)
         columns = {"time_s": c3d.time_s}
         if role == "bench":
             columns["displacement_m"] = _analog(
