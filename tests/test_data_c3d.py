@@ -86,6 +86,26 @@ def test_ami_origin_sign_either_way(tmp_path):
     np.testing.assert_allclose(loads[0].cop, loads[1].cop, atol=1e-9)
 
 
+def test_type3_origin_z_is_read_as_minus_its_magnitude(tmp_path):
+    """A type-3 ORIGIN with az0 > 0 is read as -|az0| (lab-formats.md): the COP stays the true
+    one, where ezc3d's, which takes az0 as given, moves by up to 221 mm on this stance."""
+    path, truth = write_plate_file(tmp_path / "neg.c3d", 3, "z", "mm")
+    c = ezc3d.c3d(str(path))
+    origin = np.array(c["parameters"]["FORCE_PLATFORM"]["ORIGIN"]["value"], dtype=float)
+    assert origin[2, 0] < 0
+    origin[2] = -origin[2]
+    c["parameters"]["FORCE_PLATFORM"]["ORIGIN"]["value"] = origin
+    c.write(str(tmp_path / "pos.c3d"))
+    c3d = read_c3d(tmp_path / "pos.c3d")
+    load = plate_load(c3d, c3d.plates[0], min_force_n=1.0)
+    n = load.grf.shape[1]
+    loaded = load.grf[2] > 0.05 * load.grf[2].max()
+    np.testing.assert_allclose(load.cop[:, loaded], truth.cop[:, :n][:, loaded], atol=1e-6)
+    reference = ezc3d.c3d(str(tmp_path / "pos.c3d"), extract_forceplat_data=True)
+    ezc3d_cop = reference["data"]["platform"][0]["center_of_pressure"] * 1e-3
+    assert np.abs(ezc3d_cop - truth.cop[:, :n])[:, loaded].max() > 0.2
+
+
 def test_analog_scale_gen_scale_offset_and_events(tmp_path):
     t = np.arange(100) / 1000.0
     path = write_c3d(
@@ -97,11 +117,13 @@ def test_analog_scale_gen_scale_offset_and_events(tmp_path):
         per_frame=1,
     )
     # stored: value / (SCALE * GEN_SCALE); now the file also says: subtract 3 from Gonio's
-    # stored values, which is 3 * SCALE * GEN_SCALE = 6 in its units
-    _patch_offset(path, [0, 3])
-    c3d = read_c3d(path)
-    np.testing.assert_allclose(c3d.analog("Motor"), np.sin(t), rtol=1e-6)
-    np.testing.assert_allclose(c3d.analog("Gonio"), np.cos(t) - 3 * 1.0 * 2.0, rtol=1e-6)
+    # stored values, which is 3 * SCALE * GEN_SCALE = 6 in its units; an OFFSET of -3 is
+    # applied as ezc3d applies it, by its magnitude (lab-formats.md)
+    for offset in (3, -3):
+        _patch_offset(path, [0, offset])
+        c3d = read_c3d(path)
+        np.testing.assert_allclose(c3d.analog("Motor"), np.sin(t), rtol=1e-6)
+        np.testing.assert_allclose(c3d.analog("Gonio"), np.cos(t) - 3 * 1.0 * 2.0, rtol=1e-6)
     assert [(e.label, e.context) for e in c3d.events] == [
         ("Foot Strike", "Right"),
         ("Dorsi", "General"),

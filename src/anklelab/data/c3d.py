@@ -1,7 +1,9 @@
 """C3D files through ezc3d: analog channels, force platforms (types 2, 3, 4), events.
 
 :func:`read_c3d` returns a :class:`C3DFile`: the analog channels (ezc3d applies each channel's
-``ANALOG:SCALE``, ``OFFSET`` and ``GEN_SCALE``), their labels and units, the force platforms
+``ANALOG:SCALE``, ``OFFSET`` and ``GEN_SCALE`` as ``(stored - |OFFSET|) * SCALE * GEN_SCALE``:
+the magnitude of a negative ``OFFSET``, which the C3D specification would add), their labels
+and units, the force platforms
 described by the ``FORCE_PLATFORM`` group and the events. :func:`plate_load` computes a
 platform's ground reaction force, centre of pressure and free moment in the file's global
 (lab) frame:
@@ -9,8 +11,9 @@ platform's ground reaction force, centre of pressure and free moment in the file
 - **channels** (``FORCE_PLATFORM:CHANNEL``): type 2 and 4 give Fx, Fy, Fz, Mx, My, Mz about the
   plate's origin (type 4 through ``CAL_MATRIX``, a 6x6 matrix per plate, ``CAL_MATRIX(i, j)``
   multiplying channel ``j``), type 3 the 8 Kistler channels ``fx12 fx34 fy14 fy23 fz1 fz2 fz3
-  fz4`` with ``ORIGIN = (a, b, az0)``. Plate frame and sign as the manufacturers give them:
-  load on the plate, plate z down;
+  fz4`` with ``ORIGIN = (a, b, az0)``, read as ``(|a|, |b|, -|az0|)`` whichever signs the file
+  gives (ezc3d takes a positive ``az0`` as given, and its COP is then wrong). Plate frame and
+  sign as the manufacturers give them: load on the plate, plate z down;
 - **origin** (``ORIGIN``, types 2 and 4): the vector between the plate's origin and the centre
   of its surface, in plate coordinates; its z is made negative (surface above the origin)
   whichever sign the file uses, as ezc3d and the C3D manual's note on AMTI plates do;
