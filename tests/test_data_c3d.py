@@ -9,6 +9,7 @@ import re
 import struct
 import subprocess
 import sys
+import warnings
 from pathlib import Path
 
 import ezc3d
@@ -86,6 +87,26 @@ def test_ami_origin_sign_either_way(tmp_path):
     np.testing.assert_allclose(loads[0].cop, loads[1].cop, atol=1e-9)
 
 
+def test_type3_origin_z_is_read_as_minus_its_magnitude(tmp_path):
+    """A type-3 ORIGIN with az0 > 0 is read as -|az0| (lab-formats.md): the COP stays the true
+    one, where ezc3d's, which takes az0 as given, moves by up to 221 mm on this stance."""
+    path, truth = write_plate_file(tmp_path / "neg.c3d", 3, "z", "mm")
+    c = ezc3d.c3d(str(path))
+    origin = np.array(c["parameters"]["FORCE_PLATFORM"]["ORIGIN"]["value"], dtype=float)
+    assert origin[2, 0] < 0
+    origin[2] = -origin[2]
+    c["parameters"]["FORCE_PLATFORM"]["ORIGIN"]["value"] = origin
+    c.write(str(tmp_path / "pos.c3d"))
+    c3d = read_c3d(tmp_path / "pos.c3d")
+    load = plate_load(c3d, c3d.plates[0], min_force_n=1.0)
+    n = load.grf.shape[1]
+    loaded = load.grf[2] > 0.05 * load.grf[2].max()
+    np.testing.assert_allclose(load.cop[:, loaded], truth.cop[:, :n][:, loaded], atol=1e-6)
+    reference = ezc3d.c3d(str(tmp_path / "pos.c3d"), extract_forceplat_data=True)
+    ezc3d_cop = reference["data"]["platform"][0]["center_of_pressure"] * 1e-3
+    assert np.abs(ezc3d_cop - truth.cop[:, :n])[:, loaded].max() > 0.2
+
+
 def test_analog_scale_gen_scale_offset_and_events(tmp_path):
     t = np.arange(100) / 1000.0
     path = write_c3d(
@@ -97,11 +118,13 @@ def test_analog_scale_gen_scale_offset_and_events(tmp_path):
         per_frame=1,
     )
     # stored: value / (SCALE * GEN_SCALE); now the file also says: subtract 3 from Gonio's
-    # stored values, which is 3 * SCALE * GEN_SCALE = 6 in its units
-    _patch_offset(path, [0, 3])
-    c3d = read_c3d(path)
-    np.testing.assert_allclose(c3d.analog("Motor"), np.sin(t), rtol=1e-6)
-    np.testing.assert_allclose(c3d.analog("Gonio"), np.cos(t) - 3 * 1.0 * 2.0, rtol=1e-6)
+    # stored values, which is 3 * SCALE * GEN_SCALE = 6 in its units; an OFFSET of -3 is
+    # applied as ezc3d applies it, by its magnitude (lab-formats.md)
+    for offset in (3, -3):
+        _patch_offset(path, [0, offset])
+        c3d = read_c3d(path)
+        np.testing.assert_allclose(c3d.analog("Motor"), np.sin(t), rtol=1e-6)
+        np.testing.assert_allclose(c3d.analog("Gonio"), np.cos(t) - 3 * 1.0 * 2.0, rtol=1e-6)
     assert [(e.label, e.context) for e in c3d.events] == [
         ("Foot Strike", "Right"),
         ("Dorsi", "General"),
@@ -110,6 +133,20 @@ def test_analog_scale_gen_scale_offset_and_events(tmp_path):
     np.testing.assert_allclose(np.diff(c3d.time_s), 1e-3)
     with pytest.raises(SessionFormatError, match=r"s\.c3d: no analog channel 'motor'.*case"):
         c3d.analog("motor")
+
+
+def test_a_duplicated_analog_label_is_refused_where_it_is_used(tmp_path):
+    t = np.arange(100) / 1000.0
+    path = write_c3d(tmp_path / "d.c3d", {"Fx": t, "Gonio": t, "Motor": t, "Fz": t}, per_frame=1)
+    c = ezc3d.c3d(str(path))
+    c["parameters"]["ANALOG"]["LABELS"]["value"] = ["Motor", "Gonio", "Motor", "Motor"]
+    c.write(str(path))
+    c3d = read_c3d(path)
+    np.testing.assert_array_equal(c3d.analog("Gonio"), t.astype(np.float32))
+    with pytest.raises(
+        SessionFormatError, match=r"^\S+d\.c3d: ANALOG:LABELS has 'Motor' at channels 1, 3 and 4$"
+    ):
+        c3d.analog("Motor")
 
 
 def _patch_offset(path, values):
@@ -139,6 +176,77 @@ def test_unsupported_type_and_missing_calibration_are_named(tmp_path):
     c.write(str(tmp_path / "t4.c3d"))
     with pytest.raises(SessionFormatError, match=r"t4\.c3d: plate 1 \(type 4\): .*CAL_MATRIX"):
         read_c3d(tmp_path / "t4.c3d")
+
+
+def _changed_plate_file(tmp_path, name, change):
+    """A type-2 plate file (z up, mm) changed by ``change`` (an ezc3d c3d object)."""
+    path, _ = write_plate_file(tmp_path / "p.c3d", 2, "z", "mm")
+    c = ezc3d.c3d(str(path))
+    change(c)
+    c.write(str(tmp_path / name))
+    return tmp_path / name
+
+
+def _set_parameter(name, values):
+    def change(c):
+        c["parameters"]["FORCE_PLATFORM"][name]["value"] = np.asarray(values, dtype=float)
+
+    return change
+
+
+def _set_analog(channel, sample, value):
+    def change(c):
+        analogs = c["data"]["analogs"]
+        analogs[0, channel, sample] = value
+        c["data"]["analogs"] = analogs
+
+    return change
+
+
+@pytest.mark.parametrize(
+    ("name", "change", "message"),
+    [
+        (
+            "origin.c3d",
+            _set_parameter("ORIGIN", [[np.nan], [0.0], [40.0]]),
+            r"origin\.c3d: plate 1 \(type 2\): FORCE_PLATFORM:ORIGIN \[nan, 0, 40\] is not "
+            r"finite; expected the vector from the plate's origin to its surface centre$",
+        ),
+        (
+            "corners.c3d",
+            _set_parameter("CORNERS", np.zeros((3, 4, 1))),
+            r"corners\.c3d: plate 1 \(type 2\): FORCE_PLATFORM:CORNERS do not span a plane "
+            r"\(corners \[\[0\.0, 0\.0, 0\.0\], ",
+        ),
+        (
+            "corners_nan.c3d",
+            _set_parameter("CORNERS", np.full((3, 4, 1), np.nan)),
+            r"corners_nan\.c3d: plate 1 \(type 2\): FORCE_PLATFORM:CORNERS do not span a plane",
+        ),
+    ],
+)
+def test_plate_geometry_errors_name_the_parameter(tmp_path, name, change, message):
+    path = _changed_plate_file(tmp_path, name, change)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # no RuntimeWarning besides the one message
+        with pytest.raises(SessionFormatError, match=message):
+            read_c3d(path)
+
+
+@pytest.mark.parametrize("value", [np.nan, np.inf])
+def test_a_plate_channel_that_is_not_finite_is_named(tmp_path, value):
+    """anklelab forceplate and import c3d stop at a NaN or infinite plate channel (never an
+    infinite cell written with RuntimeWarnings)."""
+    path = _changed_plate_file(tmp_path, "bad.c3d", _set_analog(2, 500, value))
+    c3d = read_c3d(path)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        with pytest.raises(
+            SessionFormatError,
+            match=rf"bad\.c3d: analog channel 3 'Fz', sample 501: value {value}; expected a "
+            r"finite number$",
+        ):
+            plate_load(c3d, c3d.plates[0])
 
 
 def test_malformed_files_get_one_clear_error(tmp_path, plate_files):

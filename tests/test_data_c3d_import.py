@@ -11,6 +11,7 @@ import sys
 import warnings
 from pathlib import Path
 
+import ezc3d
 import numpy as np
 import pytest
 
@@ -63,15 +64,17 @@ def export_trial(path, recording, geometry, *, events=(), walking_axis="+y"):
     return write_c3d(
         path,
         analogs,
-        units=dict.fromkeys(labels, "N"),
+        units=dict.fromkeys(labels, "N") | {"Motor": "deg", "Gonio": "deg"},
         plates=[plate],
         per_frame=1,
         events=events,
     )
 
 
-def export_session(session, root, *, events=False):
-    """Calibration and walking trials as C3D files, with trials.csv (text labels)."""
+def export_session(session, root, *, events=False, other_foot_s=None):
+    """Calibration and walking trials as C3D files, with trials.csv (text labels); with
+    ``events``, the heel strikes (context Right) and the onsets, and with ``other_foot_s`` the
+    left foot's strikes that long after the right's."""
     root.mkdir()
     geometry = session.info.force_plate
     rows = [["file", "role", "label", "perturbed", "direction", "delay_ms"]]
@@ -85,6 +88,8 @@ def export_session(session, root, *, events=False):
             fz = w.recording.stack(CHANNELS)[4:].sum(axis=0)
             strike = w.recording.time_s[np.argmax(fz > 25.0)]
             marks = [("Foot Strike", "Right", strike)]
+            if other_foot_s is not None:
+                marks.append(("Foot Strike", "Left", strike + other_foot_s))
             if w.perturbed:
                 onset = strike + (w.delay_ms + 3.0) / 1000.0  # an onset a little late
                 marks.append(("Dorsi" if w.direction == "dorsi" else "Plantar", "General", onset))
@@ -121,43 +126,118 @@ def test_c3d_round_trip_gives_the_native_stiffness(twin, tmp_path):
     assert imported.provenance["import"]["importer"] == "c3d"
 
 
-@pytest.mark.parametrize("kind", ["six_axis", "grf_cop"])
-def test_c3d_plate_stored_as_six_axis_or_grf_cop(twin, tmp_path, kind):
+@pytest.mark.parametrize(
+    ("kind", "min_force_n", "tolerance"),
+    [
+        # lossless
+        ("six_axis", None, 1e-3),
+        # the COP kept wherever Fz != 0 (the default): only the samples where the float32 Fz
+        # is 0 lose their moment
+        ("grf_cop", None, 3e-3),
+        # the COP empty below 10 N, as processed exports leave it: the platform's moment is
+        # not removed and the analysis says so
+        ("grf_cop", 10.0, 0.15),
+    ],
+)
+def test_c3d_plate_stored_as_six_axis_or_grf_cop(twin, tmp_path, kind, min_force_n, tolerance):
     session, root, native = twin
-    text = ('type = "kistler8"', f'type = "{kind}"')
-    imported = import_c3d(root, with_twin_delay(MAP, session, tmp_path, *text))
+    plate = f'type = "{kind}"' + ("" if min_force_n is None else f"\nmin_force_n = {min_force_n}")
+    imported = import_c3d(root, with_twin_delay(MAP, session, tmp_path, 'type = "kistler8"', plate))
     assert imported.info.force_plate.type == kind
+    blanked = min_force_n is not None
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         results = analyze_walking(imported, SETTINGS)
-    assert bool(caught) == (kind == "grf_cop")
-    # six_axis: lossless; grf_cop: the calibration COP is empty below 10 N (the mapping's
-    # min_force_n), so the platform's moment is not removed and the analysis says so
-    tolerance = 1e-3 if kind == "six_axis" else 0.15
+    assert bool(caught) == blanked
     for a, b in zip(results.timing_points, native.timing_points, strict=True):
         assert a.stiffness.mean == pytest.approx(b.stiffness.mean, rel=tolerance)
-    assert bool(results.warnings) == (kind == "grf_cop")
+        assert a.stiffness.bias_unknown == blanked
+    assert bool(results.warnings) == blanked
+
+
+def _events_map(tmp_path, extra=""):
+    text = MAP.read_text().replace(
+        '[trials]\nsource = "csv"\nfile = "trials.csv"',
+        '[trials]\nsource = "events"\ncalibration = ["cal_*.c3d"]\nheel_strike = "Foot Strike"\n'
+        'dorsi = "Dorsi"\nplantar = "Plantar"\ntiming_points_ms = [100, 225, 350, 475]' + extra,
+    )
+    (tmp_path / "map.toml").write_text(text)
+    return tmp_path / "map.toml"
+
+
+def _events_export(session, root, **options):
+    small = type(session)(session.info, session.calibration, session.walking[:12], (), None, {})
+    export_session(small, root, events=True, **options)
+    (root / "trials.csv").unlink()
+    want = [
+        (f"walk_{int(w.trial):03d}", w.perturbed, w.direction, w.delay_ms) for w in small.walking
+    ]
+    return root, want
+
+
+def _conditions(imported):
+    return [(w.trial, w.perturbed, w.direction, w.delay_ms) for w in imported.walking]
 
 
 def test_trial_roles_from_events(twin, tmp_path):
     session, _, _ = twin
-    small = type(session)(session.info, session.calibration, session.walking[:12], (), None, {})
-    root = export_session(small, tmp_path / "ev", events=True)
-    (root / "trials.csv").unlink()
-    text = MAP.read_text().replace(
-        '[trials]\nsource = "csv"\nfile = "trials.csv"',
-        '[trials]\nsource = "events"\ncalibration = ["cal_*.c3d"]\nheel_strike = "Foot Strike"\n'
-        'dorsi = "Dorsi"\nplantar = "Plantar"\ntiming_points_ms = [100, 225, 350, 475]',
-    )
-    (tmp_path / "map.toml").write_text(text)
-    imported = import_c3d(root, tmp_path / "map.toml")
+    root, want = _events_export(session, tmp_path / "ev")
+    imported = import_c3d(root, _events_map(tmp_path))
     assert len(imported.calibration) == 2
-    got = [(w.trial, w.perturbed, w.direction, w.delay_ms) for w in imported.walking]
-    want = [
-        (f"walk_{int(w.trial):03d}", w.perturbed, w.direction, w.delay_ms) for w in small.walking
-    ]
+    got = _conditions(imported)
     assert [g[:3] for g in got] == [w[:3] for w in want]
     np.testing.assert_array_equal([g[3] for g in got], [w[3] for w in want])
+
+
+def test_events_take_every_c3d_file_and_name_the_role_of_one_that_is_no_trial(twin, tmp_path):
+    """A file ending in .C3D is a trial too; a bench test in the directory is named as one
+    (it is no walking trial: it has no motor channel and no plate) until it is ignored."""
+    session, _, _ = twin
+    root, want = _events_export(session, tmp_path / "ev")
+    (root / "walk_012.c3d").rename(root / "walk_012.C3D")
+    (root / "cal_02.c3d").rename(root / "cal_02.C3D")
+    t = np.arange(500) / 1000.0
+    write_c3d(root / "bench_01.c3d", {"Disp": t, "Load": t}, per_frame=1)
+    bench_map = (
+        '\n[channels.displacement_m]\nlabel = "Disp"\n\n[channels.force_n]\nlabel = "Load"\n'
+    )
+    mapping = _events_map(tmp_path)
+    text = mapping.read_text().replace("\n[trials]", bench_map + "\n[trials]")
+    mapping.write_text(text)
+    with pytest.raises(
+        SessionFormatError,
+        match=r"bench_01\.c3d: taken for a walking trial \(\[trials\] source = \"events\": it "
+        r"matches no calibration or ignore pattern\), but it has no analog channel 'Motor', "
+        r"'Gonio' and no force platform 1: it looks like a bench test \(it has 'Disp', 'Load'\); "
+        r"list it in \[trials\] ignore, or list the trials in a CSV \(source = \"csv\"\)$",
+    ):
+        import_c3d(root, mapping)
+    mapping.write_text(text + 'ignore = ["bench_*.c3d"]\n')
+    imported = import_c3d(root, mapping)
+    assert len(imported.calibration) == 2
+    assert [g[:3] for g in _conditions(imported)] == [w[:3] for w in want]
+
+
+def test_heel_strikes_of_the_foot_on_the_plate(twin, tmp_path):
+    """Both feet's strikes marked (Nexus does): the plate foot's are chosen by their context,
+    and without a choice the files are refused (the other foot's last strike, 450 ms later,
+    filed a 475 ms trial under 100 ms)."""
+    session, _, _ = twin
+    root, want = _events_export(session, tmp_path / "ev", other_foot_s=0.45)
+    with pytest.raises(
+        SessionFormatError,
+        match=r"walk_001\.c3d: 'Foot Strike' events of the contexts 'Left' and 'Right' "
+        r"\(EVENT:CONTEXTS\); say which foot's strikes time the perturbation \(the foot on the "
+        r'plate\): \[trials\] heel_strike_context = "Left" or "Right"$',
+    ):
+        import_c3d(root, _events_map(tmp_path))
+    imported = import_c3d(root, _events_map(tmp_path, '\nheel_strike_context = "Right"'))
+    np.testing.assert_array_equal([g[3] for g in _conditions(imported)], [w[3] for w in want])
+    with pytest.raises(
+        SessionFormatError,
+        match=r"a 'Dorsi' event at \S+ s but no 'Foot Strike' event of context 'right' before it",
+    ):
+        import_c3d(root, _events_map(tmp_path, '\nheel_strike_context = "right"'))
 
 
 def _edit(tmp_path, root, old, new, target="map"):
@@ -205,6 +285,45 @@ def _edit(tmp_path, root, old, new, target="map"):
         ),
         ('source = "csv"', 'source = "files"', "map", ParameterError, r"map\.toml: .*trials"),
         (
+            'units = "deg"           # the file',
+            'units = "rad"           # the file',
+            "map",
+            ParameterError,
+            r"^\S+map\.toml: channels\.motor_angle\.units: 'rad', but \S+cal_01\.c3d gives "
+            r"'Motor' in 'deg' \(ANALOG:UNITS\); give units = \"deg\" if the file is right$",
+        ),
+        (
+            'label = "Gonio"\nunits = "deg"\n',
+            'label = "Gonio"\n',
+            "map",
+            ParameterError,
+            r"channels\.ankle_angle\.units: 'rad' \(the default\), but \S+walk_001\.c3d gives "
+            r"'Gonio' in 'deg'",
+        ),
+        (
+            'label = "Motor"',
+            'label = "Ffz1"',
+            "map",
+            ParameterError,
+            r"channels\.motor_angle\.units: 'deg', but \S+cal_01\.c3d gives 'Ffz1' in 'N' "
+            r"\(ANALOG:UNITS\): a unit of force, not of angle; is the label right\?",
+        ),
+        (
+            'units = "deg"           # the file',
+            'units = "deg"\nscale = inf  # the file',
+            "map",
+            ParameterError,
+            r"map\.toml: invalid parameters: channels\.motor_angle\.scale: Input should be a "
+            r"finite number; got inf",
+        ),
+        (
+            'units = "deg"           # the file',
+            'units = "deg"\nscale = 0.0  # the file',
+            "map",
+            ParameterError,
+            r"channels\.motor_angle\.scale: expected a finite number other than 0; got 0\.0",
+        ),
+        (
             "walk_002.c3d,walking",
             "walk_999.c3d,walking",
             "csv",
@@ -231,6 +350,97 @@ def test_malformed_mapping_or_trial_list_is_named(twin, tmp_path, old, new, targ
     _, root, _ = twin
     directory, mapping = _edit(tmp_path, root, old, new, target)
     with pytest.raises(error, match=message):
+        import_c3d(directory, mapping)
+
+
+def _with_changed_file(tmp_path, root, name, change):
+    """A copy of the C3D directory (links) whose file ``name`` is changed by ``change`` (an
+    ezc3d c3d object)."""
+    copy = tmp_path / "changed"
+    copy.mkdir()
+    for p in root.iterdir():
+        if p.name not in (name, "trials.csv"):
+            (copy / p.name).symlink_to(p)
+    (copy / "trials.csv").write_text((root / "trials.csv").read_text())
+    c = ezc3d.c3d(str(root / name))
+    change(c)
+    c.write(str(copy / name))
+    return copy
+
+
+def _analog_nan(label, sample):
+    def change(c):
+        analogs = c["data"]["analogs"]
+        analogs[0, list(c["parameters"]["ANALOG"]["LABELS"]["value"]).index(label), sample] = np.nan
+        c["data"]["analogs"] = analogs
+
+    return change
+
+
+def _origin_x(value):
+    def change(c):
+        origin = np.array(c["parameters"]["FORCE_PLATFORM"]["ORIGIN"]["value"], dtype=float)
+        origin[0] = value
+        c["parameters"]["FORCE_PLATFORM"]["ORIGIN"]["value"] = origin
+
+    return change
+
+
+@pytest.mark.parametrize(
+    ("change", "message"),
+    [
+        (
+            _analog_nan("Motor", 300),
+            r"walk_006\.c3d: analog channel 9 'Motor', sample 301: value nan; expected a finite "
+            r"number$",
+        ),
+        (
+            _analog_nan("Ffz2", 300),
+            r"walk_006\.c3d: analog channel 6 'Ffz2', sample 301: value nan; expected a finite "
+            r"number$",
+        ),
+        (
+            _origin_x(150.0),
+            r"walk_006\.c3d: plate 1 has a_m = 0\.15 \(cal_01\.c3d: 0\.12\); expected the same "
+            r"plate in every file$",
+        ),
+    ],
+)
+def test_bad_channels_and_plates_name_the_c3d_file(twin, tmp_path, change, message):
+    _, root, _ = twin
+    with pytest.raises(SessionFormatError, match=message):
+        import_c3d(_with_changed_file(tmp_path, root, "walk_006.c3d", change), MAP)
+
+
+@pytest.mark.parametrize(
+    ("edits", "message"),
+    [
+        (
+            [("walk_003.c3d,walking,S03_p100_3", "walk_003.c3d,walking,S03_p350_2")],
+            r"trials\.csv: line 6, column 'label': 'S03_p350_2' is already the label of line 5$",
+        ),
+        (
+            [
+                ("walk_001.c3d,walking,S03_d225_1", "walk_001.c3d,walking,walk_003"),
+                ("walk_003.c3d,walking,S03_p100_3", "walk_003.c3d,walking,"),
+            ],
+            r"trials\.csv: line 6, column 'label': 'walk_003' \(the file name, as the label is "
+            r"empty\) is already the label of line 4$",
+        ),
+        (
+            [(",", ";")],
+            r"trials\.csv: line 1 is separated by semicolons \('file;role;label;perturbed;"
+            r"direction;delay_ms'\); expected a comma-separated CSV$",
+        ),
+    ],
+)
+def test_trial_list_errors_name_the_line(twin, tmp_path, edits, message):
+    _, root, _ = twin
+    directory, mapping = _edit(tmp_path, root, *edits[0], "csv")
+    for old, new in edits[1:]:
+        listed = directory / "trials.csv"
+        listed.write_text(listed.read_text().replace(old, new))
+    with pytest.raises(SessionFormatError, match=message):
         import_c3d(directory, mapping)
 
 
@@ -279,9 +489,37 @@ def test_import_c3d_command_and_default_import(twin, tmp_path):
     proc = run("import", "c3d", root, "--map", MAP, "--out", out)
     assert proc.returncode == 2 and re.search(r"s\.h5: already exists; pass --force", proc.stderr)
     proc = run("import", "c3d", root, "--map", MAP, "--out", root / "inside.h5")
-    assert proc.returncode == 2 and "would land inside the input" in proc.stderr
+    assert proc.returncode == 2 and "lies inside the input" in proc.stderr
     assert not (root / "inside.h5").exists()
     # the plain `anklelab import SOURCE` still takes a session
     result = CliRunner().invoke(app, ["import", str(out), "--out", str(tmp_path / "again.h5")])
     assert result.exit_code == 0, result.output
     assert len(load_session(tmp_path / "again.h5").walking) == len(load_session(out).walking)
+
+
+def _cli(*args):
+    code = "from anklelab.cli import run; run()"
+    return subprocess.run(
+        [sys.executable, "-c", code, *map(str, args)], capture_output=True, text=True
+    )
+
+
+def test_import_c3d_never_writes_over_its_inputs(twin, tmp_path):
+    """The mapping and the trial list are inputs like the directory: --out may not name them,
+    even with --force; nor may --out be a symbolic link (as for `anklelab import`)."""
+    _, root, _ = twin
+    mapping = tmp_path / "map.toml"
+    mapping.write_text(MAP.read_text())
+    (tmp_path / "link.h5").symlink_to(tmp_path / "target.h5")
+    cases = {
+        mapping: "lies inside the input",
+        root / "trials.csv": "lies inside the input",
+        tmp_path / "link.h5": "a symbolic link",
+    }
+    before = mapping.read_bytes(), (root / "trials.csv").read_bytes()
+    for out, message in cases.items():
+        proc = _cli("import", "c3d", root, "--map", mapping, "--out", out, "--force")
+        assert proc.returncode == 2, proc.stderr
+        assert re.fullmatch(rf"error: --out \S+: .*{message}.*\n", proc.stderr), proc.stderr
+    assert (mapping.read_bytes(), (root / "trials.csv").read_bytes()) == before
+    assert not (tmp_path / "target.h5").exists()

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import ezc3d
 import h5py
 import numpy as np
 import pytest
@@ -9,6 +10,7 @@ import scipy.io
 from typer.testing import CliRunner
 
 from anklelab.cli import app
+from anklelab.data.c3d import read_c3d
 from anklelab.data.inspect import inspect_file
 from anklelab.errors import SessionFormatError
 from tests.c3d_files import write_plate_file
@@ -68,9 +70,45 @@ def test_c3d_tree_lists_channels_plates_and_parameters(tmp_path):
     assert "FORCE_PLATFORM" in result.output and "TYPE = 3" in result.output
 
 
+def _point_units(c):
+    c["parameters"]["POINT"]["UNITS"]["value"] = ["in"]
+
+
+def _origin_nan(c):
+    c["parameters"]["FORCE_PLATFORM"]["ORIGIN"]["value"] = np.array([[np.nan], [0.0], [40.0]])
+
+
+@pytest.mark.parametrize(
+    ("change", "note"),
+    [
+        (_point_units, "note: POINT:UNITS = 'in'; expected one of m, cm, mm"),
+        (_origin_nan, "note: plate 1 (type 2): FORCE_PLATFORM:ORIGIN [nan, 0, 40] is not finite"),
+    ],
+)
+def test_a_c3d_file_that_cannot_be_imported_is_still_shown(tmp_path, change, note):
+    """What keeps a file from being read as a session (a unit, a plate's geometry) is a note:
+    the tree and every parameter are printed, so that the user sees what to fix."""
+    path, _ = write_plate_file(tmp_path / "p.c3d", 2, "z", "mm")
+    c = ezc3d.c3d(str(path))
+    change(c)
+    c.write(str(path))
+    with pytest.raises(SessionFormatError):
+        read_c3d(path)
+    result = CliRunner().invoke(app, ["inspect", str(path)])
+    assert result.exit_code == 0, result.output
+    assert note in result.output
+    assert "'Fz' [N]" in result.output and "force platforms (0):" in result.output
+    assert "ORIGIN = 3x1 float64:" in result.output and "UNITS = ['" in result.output
+
+
 def test_inspect_errors(tmp_path):
-    with pytest.raises(SessionFormatError, match=r"nope\.mat: no such file"):
+    expected = r"expected a \.mat, \.c3d or HDF5 file$"
+    with pytest.raises(SessionFormatError, match=rf"nope\.mat: does not exist; {expected}"):
         inspect_file(tmp_path / "nope.mat")
+    with pytest.raises(
+        SessionFormatError, match=rf"\S+: is a directory, not a regular file; {expected}"
+    ):
+        inspect_file(tmp_path)
     (tmp_path / "x.h5").write_bytes(b"not hdf5")
     with pytest.raises(SessionFormatError, match=r"x\.h5: cannot open as HDF5"):
         inspect_file(tmp_path / "x.h5")

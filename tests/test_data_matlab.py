@@ -269,18 +269,31 @@ def test_missing_field_and_missing_variable(tmp_path, session):
 
 def test_labels_are_text_or_integers(tmp_path, session):
     """A trial label may be a char array ('d060_1') or an integer; the default file name
-    follows it."""
+    follows it, and different labels ('7' and '07', 'bench A' and 'bench_A') never share one."""
     root = as_matlab(session)
-    root["walking"][0, 0]["trial"] = "d060_1"
-    root["bench"][0, 0]["test"] = "bench A"
+    labels = ["d060_1", 2, "02", "trial_0002", "7", "07"]
+    for element, label in zip(root["walking"][0], labels, strict=False):
+        element["trial"] = label
+    for element, label in zip(root["bench"][0], ["bench A", "bench_A"], strict=False):
+        element["test"] = label
     for name in ("walking", "bench"):
         names = [n for n in root[name].dtype.names if n != "file"]
         root[name] = struct_array([{n: e[n] for n in names} for e in root[name][0]])
     scipy.io.savemat(tmp_path / "t.mat", {"session": root})
     again = read_matlab(tmp_path / "t.mat")
-    assert [t.trial for t in again.walking[:2]] == ["d060_1", "2"]
-    assert [t.recording.name for t in again.walking[:2]] == ["d060_1.csv", "trial_0002.csv"]
-    assert again.bench[0].test == "bench A" and again.bench[0].recording.name == "bench_A.csv"
+    assert [t.trial for t in again.walking[: len(labels)]] == [str(x) for x in labels]
+    assert [t.recording.name for t in again.walking[: len(labels)]] == [
+        "d060_1.csv",
+        "trial_0002.csv",
+        "02.csv",
+        "trial%5F0002.csv",
+        "trial_0007.csv",
+        "07.csv",
+    ]
+    assert [(b.test, b.recording.name) for b in again.bench[:2]] == [
+        ("bench A", "bench%20A.csv"),
+        ("bench_A", "bench_A.csv"),
+    ]
 
 
 # --- MAT v7.3 files that are damaged or point elsewhere ---------------------------------------

@@ -200,12 +200,134 @@ def _map(tmp_path, old, new):
             SessionFormatError,
             r"S07\.calibration: expected one number",
         ),
+        (
+            'grf_y_n = { field = "Fy" }',
+            "grf_y_n = { value = 1e400 }",
+            ParameterError,
+            r"map\.toml: invalid parameters: columns\.grf_y_n\.value: Input should be a finite "
+            r"number; got inf$",
+        ),
+        (
+            'grf_y_n = { field = "Fy" }',
+            'grf_y_n = { value = 0, source = "assumed" }',
+            ParameterError,
+            r"map\.toml: invalid parameters: columns\.grf_y_n\.source: unknown key$",
+        ),
+        (
+            'grf_y_n = { field = "Fy" }',
+            'grf_y_n = { field = "Fy", value = 0 }',
+            ParameterError,
+            r"map\.toml: invalid parameters: columns\.grf_y_n: give either field \(where the "
+            r"values are\) or value \(a constant\), not both",
+        ),
+        (
+            'layout = "matrices"\nperturbed = true',
+            'layout = "matrices"\nperturbed = true\ndelay_ms = 225',
+            ParameterError,
+            r"map\.toml: invalid parameters: walking\.0\.delay_ms: given both here and by the "
+            r"\{delay_ms\} wildcard of path '\{subject\}\.\{direction\}\.t\{delay_ms\}'; give "
+            r"one; got 225",
+        ),
+        (
+            'layout = "matrices"\nperturbed = true',
+            'layout = "matrices"\nperturbed = true\ndirection = "dorsi"',
+            ParameterError,
+            r"walking\.0\.direction: given both here and by the \{direction\} wildcard",
+        ),
     ],
 )
 def test_malformed_maps_and_files_name_the_key_or_path(twin, tmp_path, old, new, error, message):
     _, path = twin
     with pytest.raises(error, match=message):
         import_matlab(path, _map(tmp_path, old, new))
+
+
+@pytest.mark.parametrize("constant", ["{ value = 0 }", "{ value = 0.0, scale = 2, units = 'kN' }"])
+def test_a_constant_column(tmp_path, constant):
+    """A column the file lacks, given as a constant `{ value = ... }` (lab-formats.md); the
+    calibration group maps its own."""
+    mapping = _map(tmp_path, 'grf_y_n = { field = "Fy" }', f"grf_y_n = {constant}")
+    session = import_matlab(_tiny(tmp_path), mapping)
+    for trial in session.walking:
+        assert trial.recording["grf_y_n"].shape == (300,)
+        np.testing.assert_array_equal(trial.recording["grf_y_n"], 0.0)
+
+
+def _tiny_with(tmp_path, change):
+    """The tiny layout with ``change`` applied to its walking fields (t225 and control)."""
+    root = scipy.io.loadmat(_tiny(tmp_path), simplify_cells=True)["S01"]
+    change(root)
+    path = tmp_path / "changed.mat"
+    scipy.io.savemat(path, {"S01": root})
+    return path
+
+
+def _set(where, value):
+    def change(root):
+        node = root
+        for key in where[:-1]:
+            node = node[key]
+        node[where[-1][0]][where[-1][1:]] = value
+
+    return change
+
+
+@pytest.mark.parametrize(
+    ("where", "value", "message"),
+    [
+        (
+            ("dorsiflexion", "t225", ("angle", 100, 0)),
+            np.nan,
+            r"changed\.mat: S01\.dorsiflexion\.t225\(1\)\.angle: sample 101: value nan; expected "
+            r"a finite number \(mapped to column 'motor_angle'\)$",
+        ),
+        (
+            ("control", ("CoPx", 7, 1)),
+            np.inf,
+            r"changed\.mat: S01\.control\(2\)\.CoPx: sample 8: value inf; expected a finite number "
+            r"or NaN \(mapped to column 'cop_x_m'\)$",
+        ),
+        (
+            ("calibration", ("GRF", 11, 2)),
+            np.nan,
+            r"changed\.mat: S01\.calibration\(1\)\.GRF\(:, 3\): sample 12: value nan; expected a "
+            r"finite number \(mapped to column 'grf_z_n'\)$",
+        ),
+    ],
+)
+def test_values_that_are_not_finite_are_named_by_struct_path(tmp_path, where, value, message):
+    with pytest.raises(SessionFormatError, match=message):
+        import_matlab(_tiny_with(tmp_path, _set(where, value)), MAP)
+
+
+def test_an_empty_cop_is_read_as_nan(tmp_path):
+    """grf_cop: the COP may be empty (NaN) where the plate carries too little."""
+    session = import_matlab(_tiny_with(tmp_path, _set(("control", ("CoPx", 7, 1)), np.nan)), MAP)
+    trial = next(w for w in session.walking if w.trial == "S01.control(2)")
+    assert np.isnan(trial.recording["cop_x_m"][7]) and np.isfinite(trial.recording["grf_x_n"]).all()
+
+
+def test_a_directory_is_named_as_one(tmp_path):
+    with pytest.raises(
+        SessionFormatError,
+        match=r"\S+: is a directory, not a regular file; expected a MATLAB \.mat file$",
+    ):
+        import_matlab(tmp_path, MAP)
+    with pytest.raises(ParameterError, match=r"\S+: a directory; expected a mapping file$"):
+        import_matlab(_tiny(tmp_path), tmp_path)
+
+
+def test_a_key_under_the_wrong_table_gets_no_false_hint(tmp_path):
+    """`walking = []` written after [[calibration]] belongs to that table (TOML)."""
+    text = MAP.read_text()
+    mapping = tmp_path / "map.toml"
+    mapping.write_text(text[: text.index("[[walking]]")] + "walking = []\n")
+    with pytest.raises(
+        ParameterError,
+        match=r"map\.toml: invalid parameters: calibration\.0\.walking: unknown key; walking: "
+        r"required key is missing$",
+    ):
+        import_matlab(_tiny(tmp_path), mapping)
 
 
 def test_subjects_are_chosen_by_wildcard(twin, tmp_path):
@@ -267,3 +389,113 @@ def _tiny(tmp_path):
     path = tmp_path / "tiny_source.mat"
     scipy.io.savemat(path, {"S01": root})
     return path
+
+
+@pytest.mark.parametrize("target", ["mat", "map", "link"])
+def test_import_matlab_never_writes_over_its_inputs(twin, tmp_path, target):
+    """The .mat file and the mapping are inputs: --out may not name them, even with --force;
+    nor may --out be a symbolic link (as for `anklelab import`)."""
+    import subprocess
+    import sys
+
+    _, source = twin
+    mat, mapping = tmp_path / "S07.mat", tmp_path / "map.toml"
+    shutil.copy(source, mat)
+    shutil.copy(MAP, mapping)
+    (tmp_path / "link.h5").symlink_to(tmp_path / "target.h5")
+    out = {"mat": mat, "map": mapping, "link": tmp_path / "link.h5"}[target]
+    before = mat.read_bytes(), mapping.read_bytes()
+    code = "from anklelab.cli import run; run()"
+    args = ["import", "matlab", mat, "--map", mapping, "--out", out, "--force"]
+    proc = subprocess.run(
+        [sys.executable, "-c", code, *map(str, args)], capture_output=True, text=True
+    )
+    assert proc.returncode == 2
+    message = "a symbolic link" if target == "link" else "lies inside the input"
+    assert re.fullmatch(rf"error: --out \S+: .*{message}.*\n", proc.stderr), proc.stderr
+    assert (mat.read_bytes(), mapping.read_bytes()) == before
+    assert not (tmp_path / "target.h5").exists()
+
+
+MAP_3D = """
+format = "anklelab-matlab-map/1"
+sample_rate_hz = 1000.0
+
+[session]
+subject = "S01"
+geometry = { ankle_height_m = 0.08, heel_to_ankle_m = 0.04 }
+
+[plate]
+type = "grf_cop"
+anterior_axis = "+x"
+
+[columns]
+motor_angle = { field = "angle", units = "deg" }
+ankle_angle = { field = "ankle", units = "deg" }
+grf_x_n = { field = "GRF", column = 1 }
+grf_y_n = { field = "GRF", column = 2 }
+grf_z_n = { field = "GRF", column = 3 }
+cop_x_m = { field = "COP", column = 1 }
+cop_y_m = { field = "COP", column = 2 }
+
+[[calibration]]
+path = "S01.calibration"
+layout = "matrices"
+
+[[walking]]
+path = "S01.dorsiflexion.t{delay_ms}"
+layout = "matrices"
+perturbed = true
+direction = "dorsi"
+
+[[walking]]
+path = "S01.control"
+layout = "matrices"
+"""
+
+
+@pytest.mark.parametrize("layout", ["samples x trials", "samples x components x trials"])
+def test_matrices_count_trials_from_the_mapped_fields(tmp_path, layout):
+    """MATLAB stores samples x 1 as a vector and samples x components x 1 as a matrix: a timing
+    point with one trial is one trial, whatever unmapped fields (EMG, 4 channels) it holds."""
+    rng = np.random.default_rng(1)
+    n, three_d = 300, layout == "samples x components x trials"
+
+    def point(k):
+        fields = {
+            "angle": rng.normal(size=(n, k)),
+            "ankle": rng.normal(size=(n, k)),
+            "EMG": rng.normal(size=(n, 4, k)),
+        }
+        if three_d:
+            fields["GRF"] = rng.normal(size=(n, 3, k)) + np.array([0.0, 0.0, 600.0])[:, None]
+            fields["COP"] = rng.normal(size=(n, 2, k))
+        else:
+            fields |= {c: rng.normal(size=(n, k)) for c in ("Fx", "Fy", "CoPx", "CoPy")}
+            fields["Fz"] = 600 + rng.normal(size=(n, k))
+        return fields
+
+    root = {"fs": 1000.0, "dorsiflexion": {"t100": point(3), "t225": point(1)}, "control": point(2)}
+    if three_d:
+        root["calibration"] = point(1)
+        mapping = tmp_path / "map.toml"
+        mapping.write_text(MAP_3D)
+    else:
+        cal = {"angle": rng.normal(size=(n, 1)), "GRF": rng.normal(size=(n, 3))}
+        root["calibration"] = struct_array([cal | {"COP": rng.normal(size=(n, 2))}])
+        mapping = MAP
+    path = tmp_path / "one_trial.mat"
+    scipy.io.savemat(path, {"S01": root})
+    session = import_matlab(path, mapping)
+    labels = sorted(w.trial for w in session.walking)
+    assert labels == [
+        "S01.control(1)",
+        "S01.control(2)",
+        "S01.dorsiflexion.t100(1)",
+        "S01.dorsiflexion.t100(2)",
+        "S01.dorsiflexion.t100(3)",
+        "S01.dorsiflexion.t225(1)",
+    ]
+    one = next(w for w in session.walking if w.trial == "S01.dorsiflexion.t225(1)")
+    angle = root["dorsiflexion"]["t225"]["angle"][:, 0]
+    np.testing.assert_allclose(one.recording["motor_angle"], np.radians(angle))

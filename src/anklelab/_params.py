@@ -14,6 +14,8 @@ import json
 import os
 import stat
 import tomllib
+import types
+import typing
 from collections.abc import Iterable, Mapping
 from pathlib import Path
 from typing import Any, Literal, TypeVar
@@ -112,8 +114,10 @@ def did_you_mean(given: str, valid: Iterable[str]) -> str:
     " (did you mean 'fz3'?)"
     >>> did_you_mean("lowpass_hz", ["cutoff_hz", "filter_order"])
     " (did you mean 'cutoff_hz'?)"
+    >>> did_you_mean("walking", ["walking", "calibration"])
+    ''
     """
-    options = list(valid)
+    options = [option for option in valid if option != given]
     key = given
     if SYNONYMS.get(key) in options and key.casefold() not in map(str.casefold, options):
         return f" (did you mean {SYNONYMS[key]!r}?)"
@@ -164,8 +168,9 @@ def dotted_leaves(tree: Mapping[str, Any], prefix: str = "") -> dict[str, Any]:
     return leaves
 
 
-def _split_sources(node: Any, prefix: str, sources: dict[str, str], origin: str) -> Any:
-    """Replace ``{value, source}`` leaves by their value, collecting sources by dotted key.
+def _split_sources(node: Any, prefix: str, sources: dict[str, str] | None, origin: str) -> Any:
+    """Replace ``{value, source}`` leaves by their value, collecting sources by dotted key
+    (with ``sources=None``, a document without sources: every table is kept as it is).
 
     TOML arrays become tuples (parameter objects are immutable).
     """
@@ -173,7 +178,7 @@ def _split_sources(node: Any, prefix: str, sources: dict[str, str], origin: str)
         return tuple(node)
     if not isinstance(node, dict):
         return node
-    if "value" in node and set(node) <= {"value", "source"}:
+    if sources is not None and "value" in node and set(node) <= {"value", "source"}:
         source = node.get("source", "")
         if not isinstance(source, str) or not source.startswith(SOURCE_KINDS):
             raise ParameterError(
@@ -188,14 +193,37 @@ def _split_sources(node: Any, prefix: str, sources: dict[str, str], origin: str)
     }
 
 
-def _model_at(model: type[BaseModel], loc: tuple[Any, ...]) -> type[BaseModel]:
+def _model_in(annotation: Any) -> type[BaseModel] | None:
+    """The model an annotation holds: itself, or the model of ``X | None``, ``tuple[X, ...]``,
+    ``dict[str, X]``..."""
+    if isinstance(annotation, type) and issubclass(annotation, BaseModel):
+        return annotation
+    return next(filter(None, map(_model_in, typing.get_args(annotation))), None)
+
+
+def _without_none(annotation: Any) -> Any:
+    """``X`` for ``X | None``; any other annotation as it is."""
+    members = [a for a in typing.get_args(annotation) if a is not type(None)]
+    union = isinstance(annotation, types.UnionType) or typing.get_origin(annotation) is typing.Union
+    return members[0] if union and len(members) == 1 else annotation
+
+
+def _model_at(model: type[BaseModel], loc: tuple[Any, ...]) -> type[BaseModel] | None:
+    """The model at ``loc`` (``("walking", 0)`` is an element of the tuple ``walking``), or
+    ``None`` where the location is not in a model."""
+    annotation: Any = model
     for key in loc:
-        field = model.model_fields.get(str(key))
-        annotation = getattr(field, "annotation", None)
-        if not (isinstance(annotation, type) and issubclass(annotation, BaseModel)):
-            break
-        model = annotation
-    return model
+        annotation = _without_none(annotation)
+        origin = typing.get_origin(annotation)
+        if origin in (tuple, list, dict):  # the key is an index or a mapping key
+            annotation = typing.get_args(annotation)[1 if origin is dict else 0]
+            continue
+        current = _model_in(annotation)
+        field = current.model_fields.get(str(key)) if current is not None else None
+        if field is None:
+            return None
+        annotation = field.annotation
+    return _model_in(annotation)
 
 
 def _describe(error: Mapping[str, Any], model: type[BaseModel]) -> str:
@@ -205,22 +233,30 @@ def _describe(error: Mapping[str, Any], model: type[BaseModel]) -> str:
         return f"{key}: required key is missing"
     if error["type"] == "extra_forbidden":
         parent = _model_at(model, loc[:-1])
-        return f"{key}: unknown key{did_you_mean(str(loc[-1]), parent.model_fields)}"
+        hint = did_you_mean(str(loc[-1]), parent.model_fields) if parent is not None else ""
+        return f"{key}: unknown key{hint}"
     if error["type"] == "value_error":  # a model validator's own message names its keys
         return str(error["ctx"]["error"])
     return f"{key}: {error['msg']}; got {error.get('input')!r}"
 
 
-def parameters_from_mapping(model: type[P], data: Mapping[str, Any], *, origin: str) -> P:
-    """Validate a nested mapping into ``model``; errors name ``origin`` and the dotted key."""
-    sources: dict[str, str] = {}
+def parameters_from_mapping(
+    model: type[P], data: Mapping[str, Any], *, origin: str, with_sources: bool = True
+) -> P:
+    """Validate a nested mapping into ``model``; errors name ``origin`` and the dotted key.
+
+    With ``with_sources`` (parameter files), a leaf may be ``{value = ..., source = "..."}``;
+    without (documents whose own tables have a ``value`` key, such as a mapping's constant
+    column ``{ value = 0 }``), every table is validated as it is.
+    """
+    sources: dict[str, str] | None = {} if with_sources else None
     values = _split_sources(dict(data), "", sources, origin)
     try:
         params = model.model_validate(values)
     except ValidationError as exc:
         lines = "\n  ".join(_describe(err, model) for err in exc.errors())
         raise ParameterError(f"{origin}: invalid parameters:\n  {lines}") from None
-    params._sources = sources
+    params._sources = sources or {}
     return params
 
 

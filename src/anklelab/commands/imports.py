@@ -7,6 +7,7 @@ default; ``anklelab import c3d DIR --map M.toml --out S.h5`` and ``anklelab impo
 
 from __future__ import annotations
 
+from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Annotated, Any
 
@@ -15,7 +16,7 @@ from typer.core import TyperGroup
 
 from anklelab.commands import importer
 from anklelab.commands._progress_bars import recording_progress
-from anklelab.errors import AnklelabError
+from anklelab.errors import ParameterError, SessionFormatError
 
 if TYPE_CHECKING:
     from anklelab.data.session import Session
@@ -49,23 +50,28 @@ OutOption = Annotated[Path, typer.Option("--out", "-o", help="The HDF5 file to w
 ForceOption = Annotated[bool, typer.Option("--force", help="Replace OUT if it exists.")]
 
 
-def _write(session: Session, out: Path, force: bool) -> None:
+def _import(out: Path, force: bool, inputs: Sequence[Path], read: Callable[[], Session]) -> None:
+    """Check ``out`` as ``anklelab import`` does (not an input, not inside one and holding none,
+    no symbolic link, writable, not being written by another process), then read and write."""
+    from anklelab.commands._files import array_bytes, check_space, output_file
     from anklelab.data import save_session
 
-    with recording_progress() as task:
-        save_session(session, out, format="h5", progress=task(f"writing {out.name}"))
+    with output_file(out, force=force, inputs=inputs), recording_progress() as task:
+        session = read()
+        check_space(out, array_bytes(session.calibration, session.walking, session.bench))
+        save_session(
+            session, out, format="h5", overwrite=force, progress=task(f"writing {out.name}")
+        )
     typer.echo(
         f"{out}: {len(session.calibration)} calibration, {len(session.walking)} walking, "
         f"{len(session.bench)} bench recordings ({session.info.force_plate.type} plate)"
     )
 
 
-def _refuse(out: Path, force: bool, *inputs: Path) -> None:
-    if out.exists() and not force:
-        raise AnklelabError(f"{out}: already exists; pass --force to overwrite it")
-    for source in inputs:
-        if out.resolve().is_relative_to(source.resolve()):
-            raise AnklelabError(f"{out}: the output would land inside the input {source}")
+def _mapping_input(mapping: Path) -> None:
+    from anklelab.commands._files import check_input
+
+    check_input(mapping, what="a mapping TOML file", kinds=("file",), error=ParameterError)
 
 
 @app.command("c3d")
@@ -79,10 +85,15 @@ def import_c3d(
 ) -> None:
     """A session from per-trial C3D files: plate, motor and goniometer channels and the trial
     list (a CSV or the files' events) as the mapping says."""
-    from anklelab.data.c3d_import import import_c3d as read
+    from anklelab.commands._files import check_input
+    from anklelab.data.c3d_import import c3d_import_inputs, import_c3d
 
-    _refuse(out, force, directory)
-    _write(read(directory, mapping), out, force)
+    check_input(
+        directory, what="a directory of C3D files", kinds=("directory",), error=SessionFormatError
+    )
+    _mapping_input(mapping)
+    inputs = [directory, *c3d_import_inputs(directory, mapping)]
+    _import(out, force, inputs, lambda: import_c3d(directory, mapping))
 
 
 @app.command("matlab")
@@ -100,7 +111,9 @@ def import_matlab(
 ) -> None:
     """A session from a MATLAB file of any layout: struct paths (with wildcards over subjects,
     directions and timing points), units, scale factors and sign flips from the mapping."""
-    from anklelab.data.matlab_map import import_matlab as read
+    from anklelab.commands._files import check_input
+    from anklelab.data.matlab_map import import_matlab
 
-    _refuse(out, force)
-    _write(read(file, mapping, subject=subject), out, force)
+    check_input(file, what="a MATLAB .mat file", kinds=("file",), error=SessionFormatError)
+    _mapping_input(mapping)
+    _import(out, force, [file, mapping], lambda: import_matlab(file, mapping, subject=subject))

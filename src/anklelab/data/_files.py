@@ -22,6 +22,7 @@ __all__ = [
     "MAX_TOML_BYTES",
     "file_kind",
     "file_problem",
+    "not_a_file",
     "read_bytes",
 ]
 
@@ -67,8 +68,12 @@ def _outside(path: Path, root: Path) -> str | None:
 def file_problem(path: Path, root: Path) -> str | None:
     """What keeps ``path`` from being read as a regular file inside ``root`` ("does not exist",
     "is a named pipe (FIFO), not a regular file", ...), or ``None``."""
-    if outside := _outside(path, root):
-        return outside
+    return _outside(path, root) or not_a_file(path)
+
+
+def not_a_file(path: Path) -> str | None:
+    """What keeps ``path`` from being read as a regular file ("does not exist", "is a
+    directory, not a regular file", ...), or ``None``."""
     try:
         mode = os.stat(path).st_mode
     except FileNotFoundError:

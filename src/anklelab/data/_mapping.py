@@ -2,51 +2,55 @@
 
 A mapping names, for each session column, where its values are in the lab's file and how to
 turn them into the column's SI unit: ``value = stored * scale * unit factor``, negated when
-``flip`` is true. The unit must be one of the column's quantity (:data:`UNITS`): angles for
-``motor_angle`` and ``ankle_angle``, lengths for ``*_m`` columns, forces for ``*_n`` and the
-force channels, moments for ``mx``, ``my``, ``mz``, times for ``time_s``.
+``flip`` is true. The unit must be one of the column's quantity
+(:data:`~anklelab.data._units.UNITS`): angles for ``motor_angle`` and ``ankle_angle``, lengths
+for ``*_m`` columns, forces for ``*_n`` and the force channels, moments for ``mx``, ``my``,
+``mz``, times for ``time_s``.
 """
 
 from __future__ import annotations
 
 import hashlib
-import math
-import tomllib
 from collections.abc import Iterator, Mapping, Sequence
 from contextlib import contextmanager
 from pathlib import Path
-from typing import Any, TypeVar
+from typing import Annotated, Any, TypeVar
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
-from pydantic import Field, model_validator
+from pydantic import AfterValidator, Field, model_validator
+from pydantic_core import PydanticCustomError
 
-from anklelab._params import Parameters, parameters_from_mapping
+from anklelab._params import Parameters, parameters_from_mapping, read_parameter_document
 from anklelab.data._checks import info_from_mapping
+from anklelab.data._units import UNITS
 from anklelab.data.session import SessionInfo
 from anklelab.errors import ParameterError, SessionFormatError
 from anklelab.forceplate import CHANNELS, SIX_AXIS_CHANNELS
 
 __all__ = [
-    "UNITS",
     "ColumnMap",
     "column_quantity",
     "import_provenance",
+    "key_error",
     "naming_the_mapping",
     "read_map",
     "session_info",
 ]
 
-UNITS: dict[str, dict[str, float]] = {
-    "angle": {"rad": 1.0, "deg": math.pi / 180.0},
-    "length": {"m": 1.0, "cm": 1e-2, "mm": 1e-3},
-    "force": {"N": 1.0, "kN": 1e3},
-    "moment": {"N*m": 1.0, "N*mm": 1e-3},
-    "time": {"s": 1.0, "ms": 1e-3},
-}
-"""Units a mapping may give, by quantity, with their factor to the SI unit."""
-
 M = TypeVar("M", bound=Parameters)
+
+
+def key_error(message: str) -> PydanticCustomError:
+    """A validator's error that the mapping's message prefixes with the dotted key it concerns
+    (and suffixes with the value given), like pydantic's own errors."""
+    return PydanticCustomError("mapping", "{message}", {"message": message})
+
+
+def _not_zero(value: float) -> float:
+    if value == 0:
+        raise key_error("expected a finite number other than 0")
+    return value
 
 
 def column_quantity(column: str) -> str | None:
@@ -70,21 +74,23 @@ class ColumnMap(Parameters):
     Attributes
     ----------
     units : str, optional
-        The unit of ``stored * scale`` (see :data:`UNITS`); default the column's SI unit.
+        The unit of ``stored * scale`` (see :data:`~anklelab.data._units.UNITS`); default the
+        column's SI unit.
     scale : float
-        Factor applied first (e.g. a gear ratio, a volts-to-units gain).
+        Factor applied first (e.g. a gear ratio, a volts-to-units gain); finite, not 0.
     flip : bool
         Negate (the lab's axis or angle points the other way).
     """
 
     units: str | None = None
-    scale: float = 1.0
+    scale: Annotated[float, Field(allow_inf_nan=False), AfterValidator(_not_zero)] = 1.0
     flip: bool = False
 
     def convert(self, values: ArrayLike, column: str) -> NDArray[np.float64]:
         """``values`` in the SI unit of ``column``."""
         factor = self.factor(column) * self.scale * (-1.0 if self.flip else 1.0)
-        return np.asarray(values, dtype=np.float64) * factor
+        with np.errstate(over="ignore"):  # an overflow is an infinite value, refused by name
+            return np.asarray(values, dtype=np.float64) * factor
 
     def factor(self, column: str) -> float:
         """The unit's factor to the SI unit of ``column`` (1 when no unit is given)."""
@@ -137,16 +143,11 @@ def read_map(path: str | Path, model: type[M], fmt: str) -> M:
         Naming the file and the dotted key (unknown keys get a "did you mean" hint).
     """
     path = Path(path)
-    try:
-        document = tomllib.loads(path.read_text(encoding="utf-8"))
-    except FileNotFoundError:
-        raise ParameterError(f"{path}: mapping file not found") from None
-    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
-        raise ParameterError(f"{path}: not valid TOML: {exc}") from None
+    document = read_parameter_document(path, "toml", what="mapping file")
     if document.get("format") != fmt:
         raise ParameterError(f"{path}: format: expected {fmt!r}, got {document.get('format')!r}")
     try:
-        return parameters_from_mapping(model, document, origin=str(path))
+        return parameters_from_mapping(model, document, origin=str(path), with_sources=False)
     except ParameterError as exc:  # one line: "invalid parameters: key: ...; key: ..."
         raise ParameterError(str(exc).replace(":\n  ", ": ").replace("\n  ", "; ")) from None
 

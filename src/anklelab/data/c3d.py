@@ -1,7 +1,9 @@
 """C3D files through ezc3d: analog channels, force platforms (types 2, 3, 4), events.
 
 :func:`read_c3d` returns a :class:`C3DFile`: the analog channels (ezc3d applies each channel's
-``ANALOG:SCALE``, ``OFFSET`` and ``GEN_SCALE``), their labels and units, the force platforms
+``ANALOG:SCALE``, ``OFFSET`` and ``GEN_SCALE`` as ``(stored - |OFFSET|) * SCALE * GEN_SCALE``:
+the magnitude of a negative ``OFFSET``, which the C3D specification would add), their labels
+and units, the force platforms
 described by the ``FORCE_PLATFORM`` group and the events. :func:`plate_load` computes a
 platform's ground reaction force, centre of pressure and free moment in the file's global
 (lab) frame:
@@ -9,8 +11,9 @@ platform's ground reaction force, centre of pressure and free moment in the file
 - **channels** (``FORCE_PLATFORM:CHANNEL``): type 2 and 4 give Fx, Fy, Fz, Mx, My, Mz about the
   plate's origin (type 4 through ``CAL_MATRIX``, a 6x6 matrix per plate, ``CAL_MATRIX(i, j)``
   multiplying channel ``j``), type 3 the 8 Kistler channels ``fx12 fx34 fy14 fy23 fz1 fz2 fz3
-  fz4`` with ``ORIGIN = (a, b, az0)``. Plate frame and sign as the manufacturers give them:
-  load on the plate, plate z down;
+  fz4`` with ``ORIGIN = (a, b, az0)``, read as ``(|a|, |b|, -|az0|)`` whichever signs the file
+  gives (ezc3d takes a positive ``az0`` as given, and its COP is then wrong). Plate frame and
+  sign as the manufacturers give them: load on the plate, plate z down;
 - **origin** (``ORIGIN``, types 2 and 4): the vector between the plate's origin and the centre
   of its surface, in plate coordinates; its z is made negative (surface above the origin)
   whichever sign the file uses, as ezc3d and the C3D manual's note on AMTI plates do;
@@ -23,7 +26,9 @@ platform's ground reaction force, centre of pressure and free moment in the file
   channels); the COP lies on the plate surface and is NaN where the vertical force's
   magnitude is below ``min_force_n`` (a pulling force keeps its COP, where its moment
   vanishes); type 3's ``FPCOPPOLY`` COP correction is applied when present; the free
-  moment is the plate's moment on the body about the upward vertical through the COP.
+  moment is the plate's moment on the body about the upward vertical through the COP;
+- **errors**: a NaN or infinite value in a channel that is used, a non-finite ``ORIGIN`` or
+  ``CORNERS`` that do not span a plane are errors naming the file and the channel or parameter.
 
 ezc3d's C++ reader can crash or hang on a corrupt file, so files are read in worker processes
 (:mod:`anklelab.data._isolated`) after a check of the file's block structure; either failure is
@@ -33,15 +38,16 @@ a :class:`~anklelab.errors.SessionFormatError` naming the file.
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import Any, TypeVar
 
 import numpy as np
 from numpy.typing import NDArray
 
 from anklelab.data._isolated import IsolatedFailure, map_isolated
+from anklelab.data._units import UNITS, read_unit
 from anklelab.errors import SessionFormatError
 from anklelab.forceplate import cop_from_moment, kistler_matrix
 
@@ -58,10 +64,8 @@ __all__ = [
 ]
 
 SUPPORTED_PLATE_TYPES = (2, 3, 4)
-LENGTH_UNITS = {"m": 1.0, "cm": 1e-2, "mm": 1e-3}
-_MOMENT_UNITS = {"nm": 1.0, "n.m": 1.0, "n*m": 1.0, "n·m": 1.0, "nmm": 1e-3, "n.mm": 1e-3}
-_MOMENT_UNITS |= {"n*mm": 1e-3, "n·mm": 1e-3}
 _WORKER = Path(__file__).with_name("_c3d_worker.py")
+T = TypeVar("T")
 
 
 @dataclass(frozen=True)
@@ -142,6 +146,9 @@ class C3DFile:
     events : tuple of C3DEvent
     parameters : mapping
         Every parameter, ``{group: {name: value}}`` (text as lists of str, numbers as arrays).
+    problems : tuple of str
+        What a lenient read (:func:`read_c3d_files`) could not interpret and left out (then
+        ``length_scale`` may be NaN: ``POINT:UNITS`` unknown).
     """
 
     path: Path
@@ -155,6 +162,7 @@ class C3DFile:
     plates: tuple[C3DPlate, ...] = ()
     events: tuple[C3DEvent, ...] = ()
     parameters: Mapping[str, Mapping[str, Any]] = field(default_factory=dict)
+    problems: tuple[str, ...] = ()
 
     @property
     def n_samples(self) -> int:
@@ -167,7 +175,14 @@ class C3DFile:
         return self.start_s + np.arange(self.n_samples) / self.analog_rate_hz
 
     def analog(self, label: str) -> NDArray[np.float64]:
-        """The channel called ``label`` (an error names the file and the labels it has)."""
+        """The channel called ``label``.
+
+        Raises
+        ------
+        SessionFormatError
+            Naming the file and the labels it has, when no channel or several are called
+            ``label``.
+        """
         if label not in self.labels:
             from anklelab._params import did_you_mean
 
@@ -175,7 +190,30 @@ class C3DFile:
                 f"{self.path}: no analog channel {label!r}{did_you_mean(label, self.labels)} "
                 f"(ANALOG:LABELS: {', '.join(self.labels) or 'none'})"
             )
-        return self.analogs[self.labels.index(label)]
+        found = [str(k + 1) for k, name in enumerate(self.labels) if name == label]
+        if len(found) > 1:
+            at = f"{', '.join(found[:-1])} and {found[-1]}"
+            raise SessionFormatError(f"{self.path}: ANALOG:LABELS has {label!r} at channels {at}")
+        return self.channel(self.labels.index(label))
+
+    def channel(self, index: int) -> NDArray[np.float64]:
+        """The analog channel ``index`` (0-based), every value finite.
+
+        Raises
+        ------
+        SessionFormatError
+            Naming the file, the channel's number and label, and the first sample (1-based)
+            that is NaN or infinite.
+        """
+        values = self.analogs[index]
+        finite = np.isfinite(values)
+        if not finite.all():
+            i = int(np.argmin(finite))
+            raise SessionFormatError(
+                f"{self.path}: analog channel {index + 1} {self.labels[index]!r}, sample "
+                f"{i + 1}: value {values[i]}; expected a finite number"
+            )
+        return values
 
     def plate(self, number: int) -> C3DPlate:
         """Force platform ``number`` (1-based)."""
@@ -208,14 +246,27 @@ def _timeout(path: Path) -> float:
     return 30.0 + size / 1e6  # ezc3d reads ~50 MB/s; a hang is far beyond this
 
 
-def read_c3d_files(paths: Sequence[str | Path], *, workers: int = 2) -> list[C3DFile]:
+def read_c3d_files(
+    paths: Sequence[str | Path], *, workers: int = 2, lenient: bool = False
+) -> list[C3DFile]:
     """Read C3D files (in worker processes; see the module docstring).
+
+    Parameters
+    ----------
+    paths : sequence of str or Path
+        The files.
+    workers : int
+        Worker processes reading them.
+    lenient : bool
+        Note what keeps a file's parameters from being read (the analog rate, ``POINT:UNITS``,
+        the force platforms, the events) in :attr:`C3DFile.problems` instead of raising, and
+        leave out what it concerns (``anklelab inspect`` shows such files).
 
     Raises
     ------
     SessionFormatError
         Naming the file and the parameter for the first file that is missing, malformed or
-        describes its force platforms inconsistently.
+        (unless ``lenient``) describes its force platforms inconsistently.
     """
     files = [Path(p) for p in paths]
     for path in files:
@@ -229,12 +280,15 @@ def read_c3d_files(paths: Sequence[str | Path], *, workers: int = 2) -> list[C3D
         ) from None
     except ValueError as exc:  # the worker's report of a malformed file
         raise SessionFormatError(str(exc)) from None
-    return [_build(path, data) for path, data in zip(files, loaded, strict=True)]
+    return [
+        _build(path, data, [] if lenient else None)
+        for path, data in zip(files, loaded, strict=True)
+    ]
 
 
-def read_c3d(path: str | Path) -> C3DFile:
+def read_c3d(path: str | Path, *, lenient: bool = False) -> C3DFile:
     """Read one C3D file (see :func:`read_c3d_files`)."""
-    return read_c3d_files([path], workers=1)[0]
+    return read_c3d_files([path], workers=1, lenient=lenient)[0]
 
 
 # --- interpreting the parameters ------------------------------------------------------------------
@@ -260,14 +314,14 @@ def _text_list(path: Path, params: Mapping[str, Any], group: str, name: str) -> 
 
 def _length_scale(path: Path, params: Mapping[str, Any]) -> float:
     units = _text_list(path, params, "POINT", "UNITS")
-    unit = units[0].lower() if units else ""
-    if not unit:
+    if not units or not units[0]:
         return 1.0
-    if unit not in LENGTH_UNITS:
+    found = read_unit(units[0])
+    if found is None or found[0] != "length":
         raise SessionFormatError(
-            f"{path}: POINT:UNITS = {units[0]!r}; expected one of {', '.join(LENGTH_UNITS)}"
+            f"{path}: POINT:UNITS = {units[0]!r}; expected one of {', '.join(UNITS['length'])}"
         )
-    return LENGTH_UNITS[unit]
+    return UNITS["length"][found[1]]
 
 
 def _numbers(path: Path, params: Mapping[str, Any], name: str, shape: tuple[int, ...]) -> NDArray:
@@ -333,14 +387,32 @@ def _plates(path: Path, params: Mapping[str, Any], n_analog: int, scale: float) 
             cal_matrix=cal,
             cop_poly=cop_poly,
         )
-        axes = plate.axes() if kind in SUPPORTED_PLATE_TYPES else np.eye(3)
-        if not np.all(np.isfinite(axes)) or not np.all(np.isfinite(plate.origin_m)):
-            raise SessionFormatError(
-                f"{path}: {plate.name}: FORCE_PLATFORM:CORNERS do not span a plane (corners "
-                f"{corners[:, :4, i].T.tolist()})"
-            )
+        if kind in SUPPORTED_PLATE_TYPES:
+            _check_geometry(path, plate, origin[:, i], corners[:, :4, i].T)
         plates.append(plate)
     return plates
+
+
+def _check_geometry(
+    path: Path, plate: C3DPlate, origin: NDArray[np.float64], corners: NDArray[np.float64]
+) -> None:
+    """``ORIGIN`` finite and ``CORNERS`` spanning a plane (as the file gives them, for the
+    message), checked before anything is divided by their lengths."""
+    if not np.all(np.isfinite(origin)):
+        raise SessionFormatError(
+            f"{path}: {plate.name}: FORCE_PLATFORM:ORIGIN [{', '.join(f'{v:g}' for v in origin)}] "
+            "is not finite; expected the vector from the plate's origin to its surface centre"
+        )
+    c = plate.corners_m
+    x, y = c[0] - c[1], c[0] - c[3]
+    with np.errstate(invalid="ignore", over="ignore"):
+        area = float(np.linalg.norm(np.cross(x, y)))
+        side = float(np.linalg.norm(x) * np.linalg.norm(y))
+    if not (np.all(np.isfinite(c)) and side > 0 and area > 1e-9 * side):
+        raise SessionFormatError(
+            f"{path}: {plate.name}: FORCE_PLATFORM:CORNERS do not span a plane (corners "
+            f"{corners.tolist()})"
+        )
 
 
 def _events(path: Path, params: Mapping[str, Any]) -> list[C3DEvent]:
@@ -361,17 +433,36 @@ def _events(path: Path, params: Mapping[str, Any]) -> list[C3DEvent]:
     ]
 
 
-def _build(path: Path, data: Mapping[str, Any]) -> C3DFile:
+def _check_rate(path: Path, rate: float, n_channels: int) -> None:
+    if n_channels and not (math.isfinite(rate) and rate > 0):
+        raise SessionFormatError(f"{path}: analog rate {rate!r} Hz; expected a rate > 0")
+
+
+def _build(path: Path, data: Mapping[str, Any], problems: list[str] | None = None) -> C3DFile:
+    """The file's contents interpreted; with ``problems``, a parameter that cannot be read is
+    noted there (the file's name left out) and what it concerns left out, instead of raised."""
+
+    def noted(read: Callable[[], T], fallback: T) -> T:
+        if problems is None:
+            return read()
+        try:
+            return read()
+        except SessionFormatError as exc:
+            problems.append(str(exc).removeprefix(f"{path}: "))
+            return fallback
+
     params = data["parameters"]
     analogs = data["analogs"]
     rate = data["analog_rate_hz"]
-    if analogs.shape[0] and not (math.isfinite(rate) and rate > 0):
-        raise SessionFormatError(f"{path}: analog rate {rate!r} Hz; expected a rate > 0")
+    noted(lambda: _check_rate(path, rate, analogs.shape[0]), None)
     labels = _text_list(path, params, "ANALOG", "LABELS")[: analogs.shape[0]]
     labels += [f"channel_{i + 1}" for i in range(len(labels), analogs.shape[0])]
     units = _text_list(path, params, "ANALOG", "UNITS")[: analogs.shape[0]]
     units += [""] * (analogs.shape[0] - len(units))
-    scale = _length_scale(path, params)
+    scale = noted(lambda: _length_scale(path, params), math.nan)
+    plates: list[C3DPlate] = []
+    if math.isfinite(scale):  # else the plates' lengths are in an unknown unit
+        plates = noted(lambda: _plates(path, params, analogs.shape[0], scale), [])
     return C3DFile(
         path=path,
         analog_rate_hz=rate,
@@ -381,9 +472,10 @@ def _build(path: Path, data: Mapping[str, Any]) -> C3DFile:
         units=tuple(units),
         analogs=analogs,
         length_scale=scale,
-        plates=tuple(_plates(path, params, analogs.shape[0], scale)),
-        events=tuple(_events(path, params)),
+        plates=tuple(plates),
+        events=tuple(noted(lambda: _events(path, params), [])),
         parameters=params,
+        problems=tuple(problems or ()),
     )
 
 
@@ -391,22 +483,23 @@ def _build(path: Path, data: Mapping[str, Any]) -> C3DFile:
 
 
 def _unit_factor(c3d: C3DFile, plate: C3DPlate, channel: int, moment: bool) -> float:
-    unit = c3d.units[channel].replace(" ", "")
+    unit = c3d.units[channel]
     label = c3d.labels[channel]
-    if not unit:
+    if not unit.strip():
         return c3d.length_scale if moment else 1.0
+    found = read_unit(unit)
     if not moment:
-        if unit.lower() == "n":
+        if found == ("force", "N"):
             return 1.0
         raise SessionFormatError(
             f"{c3d.path}: {plate.name}: channel {label!r} has ANALOG:UNITS {unit!r}; expected N"
         )
-    if unit.lower() not in _MOMENT_UNITS:
+    if found is None or found[0] != "moment":
         raise SessionFormatError(
             f"{c3d.path}: {plate.name}: channel {label!r} has ANALOG:UNITS {unit!r}; expected "
             "N·m or N·mm (Nm, Nmm)"
         )
-    return _MOMENT_UNITS[unit.lower()]
+    return UNITS["moment"][found[1]]
 
 
 def plate_wrench(
@@ -433,7 +526,7 @@ def plate_wrench(
             f"{c3d.path}: {plate.name}: unsupported force-platform type {plate.type}; "
             f"expected type {', '.join(map(str, SUPPORTED_PLATE_TYPES))}"
         )
-    raw = c3d.analogs[list(plate.channels)]
+    raw = np.stack([c3d.channel(k) for k in plate.channels])
     origin = plate.origin_m
     if plate.type == 3:
         a, b, az0 = abs(origin[0]), abs(origin[1]), -abs(origin[2])

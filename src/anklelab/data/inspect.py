@@ -7,17 +7,20 @@
 - an HDF5 file's groups, datasets (shape, dtype) and attributes; links are shown, never
   followed;
 - a C3D file's rates, analog channels (label, unit, range), force platforms, events and every
-  parameter.
+  parameter; a parameter that keeps the file from being imported (``POINT:UNITS = 'in'``, a
+  non-finite ``ORIGIN``) is a note, and the rest is shown.
 """
 
 from __future__ import annotations
 
+import math
 from collections.abc import Iterator, Mapping
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
+from anklelab.data._files import not_a_file
 from anklelab.errors import SessionFormatError
 
 __all__ = ["inspect_file"]
@@ -127,12 +130,15 @@ def _hdf5(path: Path) -> Iterator[str]:
 def _c3d(path: Path) -> Iterator[str]:
     from anklelab.data.c3d import read_c3d
 
-    c3d = read_c3d(path)
+    c3d = read_c3d(path, lenient=True)
     yield f"{path}: C3D file"
+    units = f"in metres x {c3d.length_scale:g}" if math.isfinite(c3d.length_scale) else "unknown"
     yield (
         f"  analog {c3d.analog_rate_hz:g} Hz, {c3d.n_samples} samples from {c3d.start_s:g} s; "
-        f"points {c3d.point_rate_hz:g} Hz; POINT units in metres x {c3d.length_scale:g}"
+        f"points {c3d.point_rate_hz:g} Hz; POINT units {units}"
     )
+    for problem in c3d.problems:
+        yield f"  note: {problem} (left out below; the parameters are shown as they are)"
     yield f"  analog channels ({len(c3d.labels)}):"
     for k, (label, unit) in enumerate(zip(c3d.labels, c3d.units, strict=True)):
         values = c3d.analogs[k]
@@ -162,8 +168,8 @@ def inspect_file(path: str | Path) -> list[str]:
         The file is missing or cannot be read as its kind.
     """
     path = Path(path)
-    if not path.is_file():
-        raise SessionFormatError(f"{path}: no such file")
+    if problem := not_a_file(path):
+        raise SessionFormatError(f"{path}: {problem}; expected a .mat, .c3d or HDF5 file")
     suffix = path.suffix.lower()
     reader = {".mat": _matlab, ".c3d": _c3d}.get(suffix, _hdf5)
     return list(reader(path))

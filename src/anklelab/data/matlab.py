@@ -28,16 +28,19 @@ In MATLAB::
 The plate channels are those of ``force_plate.type`` (``fx12 ... fz4`` for the default
 ``kistler8``). ``file`` names the recording (defaults: ``calibration_001.csv``;
 ``trial_0001.csv`` and ``test_001.csv`` from an integer label, ``<label>.csv`` from a text
-one). In a recording struct every numeric vector as long as ``time_s`` is a column (unknown
-ones are kept); other unknown scalar or text fields of walking and bench elements are kept as
-manifest extras. Files up to v7 are read with :func:`scipy.io.loadmat`,
-v7.3 files (HDF5) with h5py. Errors name the MATLAB field, e.g. ``session.walking(3).fz1``.
+one, its characters other than letters, digits, ``-``, ``_`` and ``.`` percent-encoded, so that
+different labels never share a file). In a recording struct every numeric vector as long as
+``time_s`` is a column (unknown ones are kept); other unknown scalar or text fields of walking
+and bench elements are kept as manifest extras. Files up to v7 are read with
+:func:`scipy.io.loadmat`, v7.3 files (HDF5) with h5py. Errors name the MATLAB field, e.g.
+``session.walking(3).fz1``.
 """
 
 from __future__ import annotations
 
 import math
 import re
+import urllib.parse
 from collections.abc import Callable, Iterator
 from pathlib import Path
 from typing import Any
@@ -53,6 +56,7 @@ from anklelab.data._checks import (
     excerpt,
     info_from_mapping,
 )
+from anklelab.data._files import not_a_file
 from anklelab.data._h5safe import H5_ERRORS, check_h5_file, damaged, open_h5
 from anklelab.data._progress import Progress, ticker
 from anklelab.data.session import (
@@ -243,10 +247,24 @@ def _integer(number: float) -> int:
 
 
 def _default_name(label: str, prefix: str, digits: int) -> str:
-    """``trial_0003.csv`` for an integer label, else the label made a plain file name."""
-    if label.isdigit():
+    """The default file name of a recording, different for different labels.
+
+    ``trial_0003.csv`` for an integer label written plainly (``3``); for any other (``03``,
+    ``d060_1``) the label with every character but letters, digits, ``-``, ``_`` and ``.``
+    percent-encoded (``bench A``: ``bench%20A.csv``), and so is a leading ``.`` (no hidden
+    file) and the ``_`` of a label that reads like an integer's name (``trial_0003``).
+
+    >>> [_default_name(x, "trial", 4) for x in ("7", "07", "trial_0007", "S03 T1", ".x")]
+    ['trial_0007.csv', '07.csv', 'trial%5F0007.csv', 'S03%20T1.csv', '%2Ex.csv']
+    """
+    if label.isascii() and label.isdigit() and str(int(label)) == label:
         return f"{prefix}_{int(label):0{digits}d}.csv"
-    return re.sub(r"[^A-Za-z0-9._-]", "_", label).lstrip(".") + ".csv"
+    name = urllib.parse.quote(label, safe="-_.")
+    if name.startswith("."):
+        name = "%2E" + name[1:]
+    if re.fullmatch(rf"{prefix}_\d+", name):
+        name = name.replace("_", "%5F", 1)
+    return name + ".csv"
 
 
 def _flag(number: float) -> bool:
@@ -319,8 +337,8 @@ def read_matlab(path: str | Path, *, progress: Progress | None = None) -> Sessio
         Naming the file and the MATLAB field (``session.walking(3).delay_ms``).
     """
     path = Path(path)
-    if not path.is_file():
-        raise SessionFormatError(f"{path}: file not found")
+    if problem := not_a_file(path):
+        raise SessionFormatError(f"{path}: {problem}; expected a MATLAB .mat file")
     root = _load(path, "session")["session"]
     if not isinstance(root, dict):
         raise SessionFormatError(f"{path}: session: expected a scalar struct")

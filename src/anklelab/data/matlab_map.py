@@ -6,7 +6,8 @@ path's dot-separated parts are matched against field names, ``{subject}``, ``{di
 ``{delay_ms}`` capturing part of a name (``t225`` gives 225) and ``*`` matching anything. Each
 matched struct holds trials either as a struct array (``layout = "elements"``: one trial per
 element, each field a vector, or a matrix of which ``column`` picks one) or as signal matrices
-(``layout = "matrices"``: each field samples x trials, or samples x components x trials; NaN
+(``layout = "matrices"``: each field samples x trials, or samples x components x trials; the
+trials are counted from the mapped fields, one trial may lack its trailing dimension of 1; NaN
 padding at the end of shorter trials is removed). ``[columns.<name>]`` says which field holds
 each session column and how to convert it (``units``, ``scale``, ``flip``), or gives a constant
 ``value``; a group may override them. ``time_s`` defaults to the sample index over the rate.
@@ -20,18 +21,20 @@ import math
 import re
 from collections.abc import Iterator, Mapping
 from pathlib import Path
-from typing import Any, Literal
+from typing import Annotated, Any, Literal
 
 import numpy as np
 from numpy.typing import NDArray
-from pydantic import Field, model_validator
+from pydantic import Field, ValidationInfo, field_validator, model_validator
 
 from anklelab._params import Parameters
-from anklelab.data._checks import check_walking_row
+from anklelab.data._checks import check_recording, check_walking_row
+from anklelab.data._files import not_a_file
 from anklelab.data._mapping import (
     ColumnMap,
     SessionTable,
     import_provenance,
+    key_error,
     naming_the_mapping,
     read_map,
     session_info,
@@ -53,12 +56,13 @@ class FieldMap(ColumnMap):
 
     field: str | None = None
     column: int | None = Field(None, ge=1)
-    value: float | None = None
+    value: Annotated[float, Field(allow_inf_nan=False)] | None = None
 
     @model_validator(mode="after")
     def _one_source(self) -> FieldMap:
         if (self.field is None) == (self.value is None):
-            raise ValueError("give either field (where the values are) or value (a constant)")
+            both = ", not both" if self.field is not None else ""
+            raise key_error(f"give either field (where the values are) or value (a constant){both}")
         return self
 
 
@@ -72,6 +76,16 @@ class Group(Parameters):
     delay_ms: float | None = None
     directions: dict[str, Literal["dorsi", "plantar"]] = Field(default_factory=dict)
     columns: dict[str, FieldMap] = Field(default_factory=dict)
+
+    @field_validator("direction", "delay_ms")
+    @classmethod
+    def _not_also_a_wildcard(cls, value: object, info: ValidationInfo) -> object:
+        wildcard, path = f"{{{info.field_name}}}", info.data.get("path", "")
+        if wildcard in path:
+            raise key_error(
+                f"given both here and by the {wildcard} wildcard of path {path!r}; give one"
+            )
+        return value
 
 
 class MatlabMapping(Parameters):
@@ -152,8 +166,15 @@ def _natural(name: str) -> list[object]:
 # --- trials ---------------------------------------------------------------------------------------
 
 
-def _trials(value: Any, group: Group, where: str) -> list[tuple[str, dict[str, Any]]]:
-    """(index label, fields) of each trial a matched value holds."""
+def _trials(
+    value: Any, group: Group, specs: Mapping[str, FieldMap], where: str
+) -> list[tuple[str, dict[str, Any]]]:
+    """(index label, fields) of each trial a matched value holds.
+
+    In the ``matrices`` layout the trials are counted from the mapped fields only: the last
+    axis of samples x trials (samples x components x trials for a field with a ``column``). A
+    field with one dimension fewer holds one trial, as MATLAB drops a trailing dimension of 1.
+    """
     if group.layout == "elements":
         if isinstance(value, Mapping):
             return [("(1)", dict(value))]
@@ -163,20 +184,32 @@ def _trials(value: Any, group: Group, where: str) -> list[tuple[str, dict[str, A
         raise SessionFormatError(f'{where}: expected a struct array (layout = "elements")')
     if not isinstance(value, Mapping):
         raise SessionFormatError(f"{where}: expected a struct of signal matrices")
-    counts = {np.asarray(v).shape[-1] for v in value.values() if np.asarray(v).ndim >= 2}
-    if not counts and any(np.asarray(v).ndim == 1 for v in value.values()):
-        return [("(1)", dict(value))]  # one trial: MATLAB stored samples x 1 as a vector
-    if len(counts) != 1:
+    ndims: dict[str, int] = {}  # dimensions of each mapped field, with its trial axis
+    for spec in specs.values():
+        if spec.field is not None and spec.field in value:
+            ndims.setdefault(spec.field, 2 if spec.column is None else 3)
+    counts: dict[str, int] = {}
+    for name, ndim in ndims.items():
+        shape = np.shape(value[name])
+        if len(shape) not in (ndim, ndim - 1):
+            expected = "samples x trials" if ndim == 2 else "samples x components x trials"
+            raise SessionFormatError(
+                f"{where}.{name}: an array of shape {shape}; expected {expected} "
+                '(layout = "matrices")'
+            )
+        counts[name] = shape[-1] if len(shape) == ndim else 1
+    if len(set(counts.values())) > 1:
+        held = ", ".join(f"{name} {count}" for name, count in counts.items())
         raise SessionFormatError(
-            f"{where}: the signal matrices hold different numbers of trials ({sorted(counts)}) "
-            'or none; expected samples x trials (layout = "matrices")'
+            f"{where}: the mapped fields hold different numbers of trials ({held}); expected "
+            'the same trials in every field (layout = "matrices")'
         )
-    (count,) = counts
+    count = next(iter(counts.values()), 1)  # no mapped field: the first missing one is named
     return [
         (
             f"({k + 1})",
             {
-                name: np.asarray(v)[..., k] if np.asarray(v).ndim >= 2 else v
+                name: np.asarray(v)[..., k] if np.ndim(v) == ndims.get(name) else v
                 for name, v in value.items()
             },
         )
@@ -228,7 +261,11 @@ def _recording(
     fs: float,
     where: str,
     name: str,
+    nullable: tuple[str, ...],
 ) -> Recording:
+    """One trial's recording, its NaN padding removed and checked: values finite (NaN allowed
+    in the ``nullable`` columns: an empty COP), time increasing at ``fs``; errors name the
+    struct path of the field."""
     for column in required:
         if column not in specs and column != "time_s":
             raise ParameterError(f"columns.{column}: required column is not mapped")
@@ -248,7 +285,25 @@ def _recording(
         for c, v in values.items()
     }
     columns.setdefault("time_s", np.arange(n) / fs)
-    return Recording(name, {"time_s": columns.pop("time_s"), **columns})
+    for column, spec in specs.items():
+        _check_finite(columns[column], spec, column, where, column in nullable)
+    columns = {"time_s": columns.pop("time_s"), **columns}
+    check_recording(where, columns, required, fs, nullable=nullable)
+    return Recording(name, columns)
+
+
+def _check_finite(
+    values: NDArray[np.float64], spec: FieldMap, column: str, where: str, nullable: bool
+) -> None:
+    finite = np.isfinite(values) | (np.isnan(values) if nullable else False)
+    if spec.field is None or finite.all():
+        return
+    i = int(np.argmin(finite))
+    part = f"(:, {spec.column})" if spec.column is not None else ""
+    raise SessionFormatError(
+        f"{where}.{spec.field}{part}: sample {i + 1}: value {float(values[i])}; expected a "
+        f"finite number{' or NaN' if nullable else ''} (mapped to column {column!r})"
+    )
 
 
 def _file_name(label: str) -> str:
@@ -291,8 +346,8 @@ def import_matlab(path: str | Path, mapping: str | Path, *, subject: str | None 
         A file that does not hold what the mapping says (naming the file and the MATLAB path).
     """
     path, mapping = Path(path), Path(mapping)
-    if not path.is_file():
-        raise SessionFormatError(f"{path}: file not found")
+    if problem := not_a_file(path):
+        raise SessionFormatError(f"{path}: {problem}; expected a MATLAB .mat file")
     spec = read_map(mapping, MatlabMapping, MATLAB_MAP_FORMAT)
     with naming_the_mapping(mapping):
         return _import(path, mapping, spec, subject)
@@ -336,10 +391,12 @@ def _import(path: Path, mapping: Path, spec: MatlabMapping, subject: str | None)
             specs = {c: m for c, m in specs.items() if c != "ankle_angle"}
         required = ("time_s", "motor_angle", *(("ankle_angle",) if section == "walking" else ()))
         required += plate_model.channels
-        for index, fields in _trials(value, group, where):
+        for index, fields in _trials(value, group, specs, where):
             label = f"{resolved}{index}"
             trial_where = f"{where}{index}"
-            rec = _recording(fields, specs, required, rate, trial_where, _file_name(label))
+            rec = _recording(
+                fields, specs, required, rate, trial_where, _file_name(label), plate_model.nullable
+            )
             if rec.name in labels:
                 raise SessionFormatError(
                     f"{where}{index}: file name {rec.name} clashes with {labels[rec.name]}"
