@@ -141,5 +141,6 @@ def uncorrected_moment(session: Session) -> list[str]:
         "a bias their intervals cannot bound, and are flagged as poorly determined (on "
         "simulated platforms the stiffness moved by up to 4.5 % and the inertia by a factor of "
         "0.65 to 3.6, depending on how the export blanks the COP; export the calibration "
-        "trials' COP at every sample; see the guide 'Lab data formats')"
+        "trials' COP at every sample (import c3d: leave [plate] min_force_n at 0); see the "
+        "guide 'Lab data formats')"
     ]
