@@ -478,8 +478,19 @@ class PlatformFilters(Estimator):
         ndarray, shape (..., n_channels or n_combinations, n_times)
         """
         self._check_fitted()
+        angle = lowpass(motor_angle, self.fs_, self.cutoff_hz, order=self.filter_order)
+        return self.predict_low_passed(angle, combine=combine)
+
+    def predict_low_passed(
+        self, angle: ArrayLike, *, combine: ArrayLike | None = None
+    ) -> NDArray[np.float64]:
+        """:meth:`predict` for a motor angle already low-passed as the filters' inputs are
+        (``cutoff_hz``, ``filter_order``), N: a caller that needs the low-passed angle too
+        filters it once."""
+        self._check_fitted()
         irf = _combined(self.irf_, combine)
-        return _filter(self.input_signals(motor_angle, self.fs_), irf)
+        inputs = self._kinematics(np.asarray(angle, dtype=float), self.fs_, self.inputs)
+        return _filter(inputs, irf)
 
     def predict_departure(
         self, departure: ArrayLike, *, combine: ArrayLike | None = None

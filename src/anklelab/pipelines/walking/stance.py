@@ -354,10 +354,14 @@ def _stance_block(
         )
         return grf_z, torque, dx
 
-    own = filters.predict(motor, combine=sagittal)
+    plate_angle = lowpass(motor, **lp)
+    own = (  # the filters' inputs are low-passed as the angles (unless fitted otherwise)
+        filters.predict_low_passed(plate_angle, combine=sagittal)
+        if (filters.cutoff_hz, filters.filter_order) == (settings.cutoff_hz, settings.filter_order)
+        else filters.predict(motor, combine=sagittal)
+    )
     grf_z, torque, dx = foot_load(own)
     untwisted = torque
-    plate_angle = lowpass(motor, **lp)
     if stiffness := settings.transmission_stiffness_nm_per_rad:
         # the foot's torque twists the coupler: the plate's own forces follow the plate, which
         # departs from the motor by -T/(K + c s), T/K delayed by up to the coupler's lag c/K (the
