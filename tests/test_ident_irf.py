@@ -187,6 +187,20 @@ def test_platform_filters_angle_pathway_captures_gravity(calibration):
     assert np.max(np.abs(acc_only.predict(hold)[:, -1] - truth)) > 0.2 * truth.max()
 
 
+def test_platform_filters_predict_a_low_passed_angle_as_the_raw_one(calibration):
+    """predict_low_passed takes the angle low-passed as the filters' inputs are, and gives
+    predict's forces exactly (combined channels too)."""
+    angles, forces = calibration
+    filters = PlatformFilters().fit(angles[0], forces[0], fs=FS)
+    combine = np.eye(8)[:3]
+    low = lowpass(angles[1], FS, filters.cutoff_hz, order=filters.filter_order)
+    np.testing.assert_array_equal(filters.predict_low_passed(low), filters.predict(angles[1]))
+    np.testing.assert_array_equal(
+        filters.predict_low_passed(low, combine=combine),
+        filters.predict(angles[1], combine=combine),
+    )
+
+
 def _band_response(irf, f_hz):
     """Frequency response of FIR weights (..., n_lags) at ``f_hz``."""
     return np.array([freqz(h, 1, worN=f_hz, fs=FS)[1] for h in irf.reshape(-1, irf.shape[-1])])
