@@ -31,6 +31,10 @@ A ``[sample]`` draws ``n`` points with its own ``seed``; each key gives ``{unifo
 point (common random numbers): two settings see the same gait, noise and trial order, so their
 difference is not masked by seed-to-seed scatter.
 
+Identical points are one point, computed once: a grid that lists a value twice (``100`` and
+``100.0`` are the same value), or a sample whose ``choice`` or ``integers`` draws repeat, has
+fewer points than values or draws.
+
 A cell is one (settings, seed): a pure description from which a worker simulates and analyses
 one session. Its key is a hash of its content (and of the anklelab version), so a resumed study
 knows which cells it has.
@@ -143,8 +147,7 @@ class Cell:
             "analysis": self.analysis,
             "base": self.base,
         }
-        text = json.dumps(content, sort_keys=True, default=_jsonable)
-        return hashlib.sha256(text.encode()).hexdigest()[:16]
+        return hashlib.sha256(_canonical_text(content).encode()).hexdigest()[:16]
 
 
 @dataclass(frozen=True)
@@ -178,17 +181,24 @@ class Study:
         return list(self.grid) or [k for k in self.sample if k not in ("n", "seed")]
 
     def points(self) -> list[dict[str, Any]]:
-        """The grid's combinations or the sample's draws, each by full dotted key."""
+        """The grid's combinations or the sample's draws, each by full dotted key; a point equal
+        to an earlier one (``100`` and ``100.0`` are equal) is left out: it is the same
+        computation."""
         if self.grid:
-            keys = list(self.grid)
-            return [dict(zip(keys, v, strict=True)) for v in itertools.product(*self.grid.values())]
-        if not self.sample:
-            return [{}]
-        rng = np.random.default_rng(self.sample["seed"])
-        keys = self.varied
-        return [
-            {key: _draw(rng, self.sample[key]) for key in keys} for _ in range(self.sample["n"])
-        ]
+            keys, values = list(self.grid), self.grid.values()
+            drawn = [dict(zip(keys, v, strict=True)) for v in itertools.product(*values)]
+        elif self.sample:
+            rng = np.random.default_rng(self.sample["seed"])
+            drawn = [
+                {key: _draw(rng, self.sample[key]) for key in self.varied}
+                for _ in range(self.sample["n"])
+            ]
+        else:
+            drawn = [{}]
+        distinct: dict[str, dict[str, Any]] = {}
+        for point in drawn:
+            distinct.setdefault(_canonical_text(point), point)
+        return list(distinct.values())
 
     def cells(self) -> list[Cell]:
         """Every (point, seed), seeds innermost."""
@@ -448,7 +458,21 @@ def _analysis_misfit(params: Any, analysis: Any) -> str:
     return ""
 
 
-def _jsonable(value: Any) -> Any:
-    if isinstance(value, tuple):
-        return list(value)
-    raise TypeError(f"not JSON: {value!r}")
+def _canonical_text(content: Any) -> str:
+    """``content`` as JSON in one spelling per value: keys sorted, tuples as lists, a whole
+    float as the integer it equals (``100.0`` as ``100``: every setting takes either).
+
+    >>> _canonical_text({"b": (1.0, 2.5), "a": 100})
+    '{"a": 100, "b": [1, 2.5]}'
+    """
+    return json.dumps(_canonical(content), sort_keys=True)
+
+
+def _canonical(value: Any) -> Any:
+    if isinstance(value, float) and value.is_integer():
+        return int(value)
+    if isinstance(value, list | tuple):
+        return [_canonical(v) for v in value]
+    if isinstance(value, dict):
+        return {key: _canonical(v) for key, v in value.items()}
+    return value
