@@ -3,7 +3,10 @@ expands into, and the one ``error:`` line naming the file and key when it is wro
 
 from __future__ import annotations
 
-from anklelab.studies import study_from_mapping
+import pytest
+
+from anklelab.errors import ParameterError
+from anklelab.studies import load_study, study_from_mapping
 
 BASE = {
     "name": "spec",
@@ -39,3 +42,28 @@ def test_a_cell_key_is_the_same_for_a_whole_float_and_its_integer():
         return study_from_mapping(doc, origin="s").cells()[0].key
 
     assert key(100) == key(100.0) != key(100.5)
+
+
+@pytest.mark.parametrize(
+    ("text", "match"),
+    [
+        ("", r"nothing to run: give a \[grid\] or a \[sample\] of settings to vary, or seeds"),
+        ('name = "x"\n[twin]\ntrials_per_point = 3\n', r"nothing to run"),
+        ("seeds = 2\n[grid]\n", r"\[grid\]: empty; give at least one KEY = \[values\]"),
+        (
+            "[sample]\nn = 2\nseed = 1\n",
+            r"\[sample\]: no key to draw; give at least one KEY = \{uniform = \[lo, hi\]\}",
+        ),
+        ("[sample]\n", r"sample\.n: expected a number of points >= 1, got None"),
+    ],
+)
+def test_a_study_that_varies_nothing_is_refused_naming_what_is_missing(tmp_path, text, match):
+    path = tmp_path / "study.toml"
+    path.write_text(text, encoding="utf-8")
+    with pytest.raises(ParameterError, match=rf"^{path}: .*{match}"):
+        load_study(path)
+
+
+def test_seeds_alone_are_a_study():
+    doc = {key: value for key, value in BASE.items() if key != "grid"}
+    assert len(study_from_mapping(doc, origin="s").cells()) == 2

@@ -247,6 +247,11 @@ def study_from_mapping(data: dict[str, Any], *, origin: str, root: Path | None =
         raise ParameterError(f"{origin}: format: expected {FORMAT!r}, got {data['format']!r}")
     if "grid" in data and "sample" in data:
         raise ParameterError(f"{origin}: give either [grid] or [sample], not both")
+    if not {"grid", "sample", "seeds"} & data.keys():
+        raise ParameterError(
+            f"{origin}: nothing to run: give a [grid] or a [sample] of settings to vary, or "
+            "seeds = N to repeat the fixed settings N times"
+        )
     name = data.get("name", Path(origin).stem)
     if not isinstance(name, str) or not name:
         raise ParameterError(f"{origin}: name: expected a non-empty string, got {name!r}")
@@ -261,12 +266,17 @@ def study_from_mapping(data: dict[str, Any], *, origin: str, root: Path | None =
         if not isinstance(data.get(table, {}), dict):
             raise ParameterError(f"{origin}: [{table}]: expected a table")
     grid = dict(data.get("grid", {}))
+    if "grid" in data and not grid:
+        raise ParameterError(
+            f"{origin}: [grid]: empty; give at least one KEY = [values] (or no [grid], to "
+            "repeat the fixed settings over the seeds)"
+        )
     for key, values in grid.items():
         _check_key(key, origin, "grid")
         if not isinstance(values, list) or not values:
             raise ParameterError(f"{origin}: grid.{key}: expected a non-empty list of values")
     sample = dict(data.get("sample", {}))
-    if sample:
+    if "sample" in data:
         _check_sample(sample, origin)
     for key in fixed.keys() & {*grid, *sample}:
         table = "grid" if key in grid else "sample"
@@ -338,6 +348,11 @@ def _check_sample(sample: dict[str, Any], origin: str) -> None:
         raise ParameterError(f"{origin}: sample.n: expected a number of points >= 1, got {n!r}")
     if not isinstance(seed, int) or isinstance(seed, bool) or seed < 0:
         raise ParameterError(f"{origin}: sample.seed: expected an integer >= 0, got {seed!r}")
+    if not sample.keys() - {"n", "seed"}:
+        raise ParameterError(
+            f"{origin}: [sample]: no key to draw; give at least one KEY = {{uniform = [lo, hi]}}, "
+            "{loguniform = [lo, hi]}, {integers = [lo, hi]} or {choice = [...]}"
+        )
     for key, spec in sample.items():
         if key in ("n", "seed"):
             continue
