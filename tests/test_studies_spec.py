@@ -67,3 +67,23 @@ def test_a_study_that_varies_nothing_is_refused_naming_what_is_missing(tmp_path,
 def test_seeds_alone_are_a_study():
     doc = {key: value for key, value in BASE.items() if key != "grid"}
     assert len(study_from_mapping(doc, origin="s").cells()) == 2
+
+
+@pytest.mark.parametrize(
+    ("change", "match"),
+    [
+        ({"seeds": 100_001}, r"seeds: 100001 sessions \(1 point × 100001 seeds\)"),
+        ({"seeds": 10**12}, r"seeds: 1000000000000 sessions \(1 point × 1000000000000 seeds\)"),
+        (
+            {"grid": {"analysis.window_ms": [100.0] * 400, "twin.noise_scale": [1.0] * 300}},
+            r"grid: 240000 sessions \(400 × 300 points × 2 seeds\)",
+        ),
+        (
+            {"sample": {"n": 10**9, "seed": 0, "twin.noise_scale": {"uniform": [1.0, 2.0]}}},
+            r"sample: 2000000000 sessions \(1000000000 points × 2 seeds\)",
+        ),
+    ],
+)
+def test_a_study_too_large_is_refused_before_anything_is_expanded(change, match):
+    with pytest.raises(ParameterError, match=rf"^s\.toml: {match}; at most 100000 sessions in one"):
+        study_from_mapping(BASE | change, origin="s.toml")

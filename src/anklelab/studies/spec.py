@@ -46,6 +46,7 @@ import hashlib
 import itertools
 import json
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Literal
@@ -59,6 +60,7 @@ from anklelab._version import __version__, code_fingerprint
 from anklelab.errors import ParameterError
 
 __all__ = [
+    "MAX_SESSIONS",
     "PREFIXES",
     "Cell",
     "Study",
@@ -69,6 +71,9 @@ __all__ = [
 
 PREFIXES = ("twin", "params", "analysis")
 FORMAT = "anklelab-study/1"
+MAX_SESSIONS = 100_000
+"""Sessions (points x seeds) one study may hold: counted from the file, before any point is
+expanded. A study this size takes days on one machine; beyond it, split the study."""
 
 
 class TwinSettings(Parameters):
@@ -283,8 +288,9 @@ def study_from_mapping(data: dict[str, Any], *, origin: str, root: Path | None =
         raise ParameterError(
             f"{origin}: {key}: given as a fixed setting and in [{table}]; keep one"
         )
+    _check_size(origin, grid, sample, len(seeds))
     base = _base(data.get("params_file"), origin, root)
-    study = Study(name, seeds, fixed, grid, sample, base)
+    study = Study(name, tuple(seeds), fixed, grid, sample, base)
     for key in {*fixed, *study.varied}:
         _check_key(key, origin, "grid" if key in grid else "setting")
     _validate_cells(study, origin)
@@ -316,18 +322,36 @@ def _flatten(table: dict[str, Any], prefix: str) -> dict[str, Any]:
     return out
 
 
-def _seeds(value: Any, origin: str) -> tuple[int, ...]:
+def _seeds(value: Any, origin: str) -> Sequence[int]:
+    """The seeds a study file gives (a count or a list), not yet expanded: a ``range``."""
     if isinstance(value, int) and not isinstance(value, bool) and value >= 1:
-        return tuple(range(value))
+        return range(value)
     if (
         isinstance(value, list)
         and value
         and all(isinstance(s, int) and not isinstance(s, bool) and s >= 0 for s in value)
         and len(set(value)) == len(value)
     ):
-        return tuple(value)
+        return value
     raise ParameterError(
         f"{origin}: seeds: expected a count >= 1 or a list of distinct seeds >= 0, got {value!r}"
+    )
+
+
+def _check_size(
+    origin: str, grid: dict[str, list[Any]], sample: dict[str, Any], seeds: int
+) -> None:
+    """At most :data:`MAX_SESSIONS` sessions, counted before anything is expanded."""
+    sizes = [len(values) for values in grid.values()] or [sample.get("n", 1)]
+    total = math.prod(sizes) * seeds
+    if total <= MAX_SESSIONS:
+        return
+    table = "grid" if grid else "sample" if sample else "seeds"
+    points = " × ".join(map(str, sizes))
+    plural = "" if sizes == [1] else "s"
+    raise ParameterError(
+        f"{origin}: {table}: {total} sessions ({points} point{plural} × {seeds} seeds); at most "
+        f"{MAX_SESSIONS} sessions in one study: split it into several studies"
     )
 
 
