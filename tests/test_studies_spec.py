@@ -87,3 +87,20 @@ def test_seeds_alone_are_a_study():
 def test_a_study_too_large_is_refused_before_anything_is_expanded(change, match):
     with pytest.raises(ParameterError, match=rf"^s\.toml: {match}; at most 100000 sessions in one"):
         study_from_mapping(BASE | change, origin="s.toml")
+
+
+@pytest.mark.parametrize(
+    ("content", "match"),
+    [
+        (None, r"nonexistent\.toml: parameter file not found"),
+        ("[geometry]\ncolour = 1\n", r"colour"),
+        ("not toml", r"not valid TOML"),
+    ],
+)
+def test_a_bad_params_file_is_named_with_the_study_file_and_its_key(tmp_path, content, match):
+    name = "nonexistent.toml" if content is None else "platform.toml"
+    if content is not None:
+        (tmp_path / name).write_text(content, encoding="utf-8")
+    doc = BASE | {"params_file": name}
+    with pytest.raises(ParameterError, match=rf"(?s)^s\.toml: params_file = '{name}': .*{match}"):
+        study_from_mapping(doc, origin="s.toml", root=tmp_path)

@@ -57,7 +57,7 @@ from pydantic import Field, model_validator
 from anklelab._params import Parameters, did_you_mean, read_parameter_document
 from anklelab._session_limits import MAX_TRIALS_PER_POINT, MAX_UNPERTURBED
 from anklelab._version import __version__, code_fingerprint
-from anklelab.errors import ParameterError
+from anklelab.errors import AnklelabError, ParameterError
 
 __all__ = [
     "MAX_SESSIONS",
@@ -421,7 +421,10 @@ def _base(path: Any, origin: str, root: Path | None) -> dict[str, Any] | None:
     from anklelab.platforms import load_platform
 
     full = (root or Path.cwd()) / path
-    return load_platform("perturberator", full).model_dump()
+    try:
+        return load_platform("perturberator", full).model_dump()
+    except AnklelabError as exc:
+        raise ParameterError(f"{origin}: params_file = {path!r}: {exc}") from None
 
 
 def _validate_cells(study: Study, origin: str) -> None:
