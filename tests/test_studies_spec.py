@@ -104,3 +104,29 @@ def test_a_bad_params_file_is_named_with_the_study_file_and_its_key(tmp_path, co
     doc = BASE | {"params_file": name}
     with pytest.raises(ParameterError, match=rf"(?s)^s\.toml: params_file = '{name}': .*{match}"):
         study_from_mapping(doc, origin="s.toml", root=tmp_path)
+
+
+@pytest.mark.parametrize(
+    ("text", "match"),
+    [
+        (
+            "[grid]\nparams.geometry.misalignment_anterior_m = [0.0, 0.01]\n",
+            r'\[grid\] params: .*quote the key: "params\.geometry\.misalignment_anterior_m" = \[',
+        ),
+        (
+            '[grid.twin]\nfoot = ["human"]\n',
+            r'\[grid\] twin: .*quote the key: "twin\.foot" = \[',
+        ),
+        (
+            "[sample]\nn = 2\nseed = 1\ntwin.noise_scale = {uniform = [1.0, 2.0]}\n",
+            r'\[sample\] twin: .*quote the key: "twin\.noise_scale" = \{',
+        ),
+    ],
+)
+def test_an_unquoted_dotted_key_gets_the_hint_to_quote_it(tmp_path, text, match):
+    """TOML reads ``params.geometry.x = [...]`` as nested tables: the message said only that
+    the key was not of the form twin.KEY, params.SECTION.KEY or analysis.KEY."""
+    path = tmp_path / "study.toml"
+    path.write_text(text, encoding="utf-8")
+    with pytest.raises(ParameterError, match=rf"^{path}: {match}"):
+        load_study(path)

@@ -277,6 +277,7 @@ def study_from_mapping(data: dict[str, Any], *, origin: str, root: Path | None =
             "repeat the fixed settings over the seeds)"
         )
     for key, values in grid.items():
+        _check_nested("grid", key, values, origin)
         _check_key(key, origin, "grid")
         if not isinstance(values, list) or not values:
             raise ParameterError(f"{origin}: grid.{key}: expected a non-empty list of values")
@@ -366,6 +367,28 @@ def _check_key(key: str, origin: str, where: str) -> None:
 _DISTRIBUTIONS = ("uniform", "loguniform", "integers", "choice")
 
 
+def _check_nested(table: str, key: str, value: Any, origin: str) -> None:
+    """A table where ``[grid]`` or ``[sample]`` expects a setting is TOML's reading of an unquoted
+    dotted key (``params.geometry.x = [...]`` is ``{"params": {"geometry": {"x": [...]}}}``), or
+    of a ``[grid.twin]`` table: the message names the key to quote."""
+    if "." in key or not isinstance(value, dict):
+        return
+    parts = [key]
+    while isinstance(value, dict) and value and not (table == "sample" and _is_draw(value)):
+        name, value = next(iter(value.items()))
+        parts.append(name)
+    example = "[...]" if table == "grid" else "{...}"
+    raise ParameterError(
+        f"{origin}: [{table}] {key}: a table, where a setting was expected: TOML reads an "
+        f'unquoted dotted key as nested tables; quote the key: "{".".join(parts)}" = {example}'
+    )
+
+
+def _is_draw(spec: Any) -> bool:
+    """Whether ``spec`` names one distribution of :data:`_DISTRIBUTIONS` (its arguments aside)."""
+    return isinstance(spec, dict) and len(spec) == 1 and next(iter(spec)) in _DISTRIBUTIONS
+
+
 def _check_sample(sample: dict[str, Any], origin: str) -> None:
     n, seed = sample.get("n"), sample.get("seed")
     if not isinstance(n, int) or isinstance(n, bool) or n < 1:
@@ -380,8 +403,9 @@ def _check_sample(sample: dict[str, Any], origin: str) -> None:
     for key, spec in sample.items():
         if key in ("n", "seed"):
             continue
+        _check_nested("sample", key, spec, origin)
         _check_key(key, origin, "sample")
-        ok = isinstance(spec, dict) and len(spec) == 1 and next(iter(spec)) in _DISTRIBUTIONS
+        ok = _is_draw(spec)
         kind, args = next(iter(spec.items())) if ok else (None, None)
         if ok and kind != "choice":
             ok = (
