@@ -130,3 +130,12 @@ def test_an_unquoted_dotted_key_gets_the_hint_to_quote_it(tmp_path, text, match)
     path.write_text(text, encoding="utf-8")
     with pytest.raises(ParameterError, match=rf"^{path}: {match}"):
         load_study(path)
+
+
+@pytest.mark.parametrize("bounds", [[6.9, 8.2], [6.0, 8.0], [True, 8]])
+def test_integers_are_drawn_between_whole_numbers_only(bounds):
+    """``{integers = [6.9, 8.2]}`` drew 6, below its lower end."""
+    sample = {"n": 3, "seed": 1, "twin.noise_scale": {"integers": bounds}}
+    match = r"sample\.twin\.noise_scale: expected one of .*\{integers = \[lo, hi\]\} \(whole"
+    with pytest.raises(ParameterError, match=match):
+        study_from_mapping(BASE | {"sample": sample}, origin="s.toml")

@@ -26,7 +26,7 @@ by a dotted key with one of three prefixes:
     "params.geometry.misalignment_anterior_m" = [0.0, 0.008, 0.016]
 
 A ``[sample]`` draws ``n`` points with its own ``seed``; each key gives ``{uniform = [lo, hi]}``,
-``{loguniform = [lo, hi]}``, ``{integers = [lo, hi]}`` (both ends included) or
+``{loguniform = [lo, hi]}``, ``{integers = [lo, hi]}`` (whole numbers, both ends included) or
 ``{choice = [...]}``. Every point (grid or sample) runs once per seed. The same seeds serve every
 point (common random numbers): two settings see the same gait, noise and trial order, so their
 difference is not masked by seed-to-seed scatter.
@@ -408,10 +408,11 @@ def _check_sample(sample: dict[str, Any], origin: str) -> None:
         ok = _is_draw(spec)
         kind, args = next(iter(spec.items())) if ok else (None, None)
         if ok and kind != "choice":
+            number = int if kind == "integers" else int | float
             ok = (
                 isinstance(args, list)
                 and len(args) == 2
-                and all(isinstance(a, int | float) and not isinstance(a, bool) for a in args)
+                and all(isinstance(a, number) and not isinstance(a, bool) for a in args)
                 and args[0] <= args[1]
                 and (kind != "loguniform" or args[0] > 0)
             )
@@ -420,8 +421,8 @@ def _check_sample(sample: dict[str, Any], origin: str) -> None:
         if not ok:
             raise ParameterError(
                 f"{origin}: sample.{key}: expected one of {{uniform = [lo, hi]}}, "
-                f"{{loguniform = [lo, hi]}} (lo > 0), {{integers = [lo, hi]}} or "
-                f"{{choice = [...]}}, got {spec!r}"
+                f"{{loguniform = [lo, hi]}} (lo > 0), {{integers = [lo, hi]}} (whole numbers) "
+                f"or {{choice = [...]}}, got {spec!r}"
             )
 
 
@@ -432,7 +433,7 @@ def _draw(rng: np.random.Generator, spec: dict[str, Any]) -> Any:
     if kind == "loguniform":
         return float(np.exp(rng.uniform(np.log(args[0]), np.log(args[1]))))
     if kind == "integers":
-        return int(rng.integers(int(args[0]), int(args[1]) + 1))
+        return int(rng.integers(args[0], args[1] + 1))
     value = args[int(rng.integers(len(args)))]
     return value
 
