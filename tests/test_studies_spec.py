@@ -139,3 +139,18 @@ def test_integers_are_drawn_between_whole_numbers_only(bounds):
     match = r"sample\.twin\.noise_scale: expected one of .*\{integers = \[lo, hi\]\} \(whole"
     with pytest.raises(ParameterError, match=match):
         study_from_mapping(BASE | {"sample": sample}, origin="s.toml")
+
+
+def test_the_study_record_names_its_params_file_and_its_sha256(tmp_path):
+    """run.json recorded only ``"params_file": true``: which file, with what content?"""
+    import shutil
+
+    from anklelab._runs import sha256_file
+    from anklelab.platforms.registry import platform_file
+
+    path = tmp_path / "platform.toml"
+    shutil.copyfile(platform_file("perturberator"), path)
+    study = study_from_mapping(BASE | {"params_file": "platform.toml"}, origin="s", root=tmp_path)
+    record = study.describe()["params_file"]
+    assert record == {"path": str(path.resolve()), "sha256": sha256_file(path)}
+    assert study_from_mapping(BASE, origin="s").describe()["params_file"] is None

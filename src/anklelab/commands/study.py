@@ -85,6 +85,8 @@ def study(
         )  # fmt: skip
         run.settings.update(study=spec.describe(), retries=retries, figures=figures)
         run.add_input(study_file)
+        if spec.params_file is not None:
+            run.add_input(Path(spec.params_file["path"]), spec.params_file["sha256"])
     _print_summary(result.summary, spec.varied, result.results)
     typer.echo(
         f"{len(result.cells)} sessions ({result.resumed} already done, {result.ran} run); "

@@ -171,6 +171,8 @@ class Study:
         ``{"n": ..., "seed": ..., key: distribution}`` (empty for a grid study).
     base : dict or None
         Parameter set from ``params_file`` (already validated).
+    params_file : dict or None
+        Where ``base`` was read: ``{"path": the file's absolute path, "sha256": its SHA-256}``.
     """
 
     name: str
@@ -179,6 +181,7 @@ class Study:
     grid: dict[str, list[Any]]
     sample: dict[str, Any]
     base: dict[str, Any] | None = None
+    params_file: dict[str, str] | None = None
 
     @property
     def varied(self) -> list[str]:
@@ -226,7 +229,7 @@ class Study:
             "fixed": self.fixed,
             "grid": self.grid,
             "sample": self.sample,
-            "params_file": self.base is not None,
+            "params_file": self.params_file,
         }
 
 
@@ -290,8 +293,8 @@ def study_from_mapping(data: dict[str, Any], *, origin: str, root: Path | None =
             f"{origin}: {key}: given as a fixed setting and in [{table}]; keep one"
         )
     _check_size(origin, grid, sample, len(seeds))
-    base = _base(data.get("params_file"), origin, root)
-    study = Study(name, tuple(seeds), fixed, grid, sample, base)
+    base, params_file = _base(data.get("params_file"), origin, root)
+    study = Study(name, tuple(seeds), fixed, grid, sample, base, params_file)
     for key in {*fixed, *study.varied}:
         _check_key(key, origin, "grid" if key in grid else "setting")
     _validate_cells(study, origin)
@@ -438,18 +441,24 @@ def _draw(rng: np.random.Generator, spec: dict[str, Any]) -> Any:
     return value
 
 
-def _base(path: Any, origin: str, root: Path | None) -> dict[str, Any] | None:
+def _base(
+    path: Any, origin: str, root: Path | None
+) -> tuple[dict[str, Any] | None, dict[str, str] | None]:
+    """The parameter set of ``params_file`` (relative to ``root``) and where it was read (its
+    absolute path and SHA-256); ``(None, None)`` without one."""
     if path is None:
-        return None
+        return None, None
     if not isinstance(path, str):
         raise ParameterError(f"{origin}: params_file: expected a path, got {path!r}")
+    from anklelab._runs import sha256_file
     from anklelab.platforms import load_platform
 
     full = (root or Path.cwd()) / path
     try:
-        return load_platform("perturberator", full).model_dump()
+        base = load_platform("perturberator", full).model_dump()
     except AnklelabError as exc:
         raise ParameterError(f"{origin}: params_file = {path!r}: {exc}") from None
+    return base, {"path": str(full.resolve()), "sha256": sha256_file(full)}
 
 
 def _validate_cells(study: Study, origin: str) -> None:
