@@ -568,3 +568,17 @@ def test_a_randomised_study_window_is_checked_against_the_shortest_stance_drawn(
         study_from_mapping(mapping, origin="w.toml")
     mapping["params"] = {"gait.stance_s": 0.8}  # a stance the study sets is not drawn
     study_from_mapping(mapping, origin="w.toml")
+
+
+@pytest.mark.parametrize("twin", [{"unperturbed_per_point": 2.0}, {"n_unperturbed": 3}])
+def test_a_randomised_draw_records_the_unperturbed_trials_simulated(twin):
+    """``draw.n_unperturbed`` gave the draw's own count, not the one the study set."""
+    from anklelab.studies.cell import simulate_cell
+    from anklelab.studies.spec import Cell
+
+    settings = twin | {"randomised": "prosthetic", "trials_per_point": 2, "n_calibration": 1,
+                       "bench": False}  # fmt: skip
+    session = simulate_cell(Cell(0, 1, settings, {}, {}, {}))
+    simulated = sum(not trial.perturbed for trial in session.walking)
+    assert simulated == twin.get("n_unperturbed", 4)
+    assert session.truth["draw"]["n_unperturbed"] == simulated
