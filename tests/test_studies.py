@@ -186,7 +186,8 @@ def test_the_study_table_holds_truth_estimate_interval_error_and_coverage(refere
     summary = pd.read_csv(out / "summary.csv")
     assert {"bias_percent", "sd_percent", "rmse_percent", "coverage",
             "poorly_determined_fraction"} <= set(summary.columns)  # fmt: skip
-    assert (out / "figures" / "stiffness_error_vs_misalignment_anterior_m.png").is_file()
+    figure = "stiffness_error_vs_params.geometry.misalignment_anterior_m.png"  # the full key
+    assert (out / "figures" / figure).is_file()
     assert len(pd.read_csv(out / "cells.csv")) == 4
 
 
@@ -582,3 +583,34 @@ def test_a_randomised_draw_records_the_unperturbed_trials_simulated(twin):
     simulated = sum(not trial.perturbed for trial in session.walking)
     assert simulated == twin.get("n_unperturbed", 4)
     assert session.truth["draw"]["n_unperturbed"] == simulated
+
+
+def _summary_of(points: dict[str, list], n: int = 2) -> pd.DataFrame:
+    """A summary table over ``points`` (full key: values, one row each) at two timing points."""
+    rows = []
+    for i in range(len(next(iter(points.values())))):
+        for delay in (100.0, 225.0):
+            rows.append(
+                {key: values[i] for key, values in points.items()}
+                | {"direction": "dorsi", "delay_ms": delay, "quantity": "stiffness_nm_per_rad",
+                   "n_sessions": n, "n_failed": 0, "bias_percent": 0.1 * i, "sd_percent": 0.5,
+                   "rmse_percent": 0.6, "abs_error_percent_max": 1.0, "coverage": 1.0,
+                   "interval_kind": "ci95"}
+            )  # fmt: skip
+    return pd.DataFrame(rows)
+
+
+def test_two_varied_keys_of_the_same_last_name_keep_their_own_figure_and_column(tmp_path, capsys):
+    """``analysis.window_ms`` and ``params.walking.window_ms`` wrote the same figure (the second
+    replaced the first) and showed the same column header."""
+    from anklelab.commands.study import _print_summary
+    from anklelab.studies.figures import study_figures
+
+    keys = ["analysis.window_ms", "params.walking.window_ms"]
+    summary = _summary_of({keys[0]: [75.0, 100.0], keys[1]: [100.0, 125.0]})
+    written = study_figures(summary, keys, tmp_path, title="clash")
+    assert [path.name for path in written] == [f"stiffness_error_vs_{key}.png" for key in keys]
+    assert all(path.is_file() for path in written)
+    _print_summary(summary, keys, pd.DataFrame())
+    header = next(line for line in capsys.readouterr().out.splitlines() if "point" in line)
+    assert all(key in header for key in keys), header

@@ -132,7 +132,7 @@ def _print_summary(summary: pd.DataFrame, varied: list[str], results: pd.DataFra
         f"cover: share of the intervals ({kinds}) holding the truth",
     )
     for key in varied:
-        table.add_column(key.rsplit(".", 1)[-1], justify="right", overflow="fold")
+        table.add_column(key, justify="right", overflow="fold")
     for column in ("point", "n", "bias", "sd", "RMSE", "max", "cover"):
         table.add_column(column, justify="right", no_wrap=True)
     for _, row in rows.iterrows():
@@ -149,7 +149,10 @@ def _print_summary(summary: pd.DataFrame, varied: list[str], results: pd.DataFra
             *(f"{row[k]:g}" if isinstance(row[k], float) else str(row[k]) for k in varied),
             f"all {row['n_failed']} failed", "0", *([""] * 5),
         )  # fmt: skip
-    Console().print(table)
+    console = Console()
+    if not console.is_terminal:  # a log or a pipe: never fold the full keys of the header
+        console.width = max(console.width, 200)
+    console.print(table)
 
 
 def _report_failures(failed: pd.DataFrame) -> None:

@@ -140,14 +140,22 @@ def _positions(values: list[Any]) -> tuple[list[float], list[str] | None]:
 
 
 def _label(key: str) -> str:
-    """``params.geometry.misalignment_anterior_m`` -> ``misalignment anterior (m)``."""
-    leaf = key.rsplit(".", 1)[-1]
+    """The full key, its unit apart (two keys may share their last part).
+
+    >>> _label("params.geometry.misalignment_anterior_m")
+    'params.geometry.misalignment anterior (m)'
+    """
+    head, _, leaf = key.rpartition(".")
+    words = leaf.replace("_", " ")
     for suffix, unit in (("_m", "m"), ("_ms", "ms"), ("_hz", "Hz"), ("_rad", "rad"),
                          ("_rad_per_nm", "rad/(N·m)"), ("_s", "s")):  # fmt: skip
         if leaf.endswith(suffix) and not leaf.endswith("_per" + suffix):
-            return f"{leaf[: -len(suffix)].replace('_', ' ')} ({unit})"
-    return leaf.replace("_", " ")
+            words = f"{leaf[: -len(suffix)].replace('_', ' ')} ({unit})"
+            break
+    return f"{head}.{words}" if head else words
 
 
 def _slug(key: str) -> str:
-    return re.sub(r"[^A-Za-z0-9]+", "_", key.rsplit(".", 1)[-1]).strip("_")
+    """The full key as part of a file name (``analysis.window_ms`` and
+    ``params.walking.window_ms`` are two figures)."""
+    return re.sub(r"[^A-Za-z0-9._-]+", "_", key).strip("_.")
