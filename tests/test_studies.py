@@ -614,3 +614,15 @@ def test_two_varied_keys_of_the_same_last_name_keep_their_own_figure_and_column(
     _print_summary(summary, keys, pd.DataFrame())
     header = next(line for line in capsys.readouterr().out.splitlines() if "point" in line)
     assert all(key in header for key in keys), header
+
+
+def test_a_list_valued_setting_is_drawn_with_its_values_as_labels(tmp_path):
+    """A grid over ``params.walking.timing_points_ms`` ran every cell, then the figure step
+    failed on the lists (unhashable) and the study ended in a traceback."""
+    from anklelab.studies.figures import study_figures
+
+    key = "params.walking.timing_points_ms"
+    summary = _summary_of({key: [[100.0, 225.0], [100.0, 350.0]], "twin.noise_scale": [1.0, 2.0]})
+    written = study_figures(summary, [key, "twin.noise_scale"], tmp_path, title="lists")
+    assert written[0].name == f"stiffness_error_vs_{key}.png"
+    assert all(path.is_file() for path in written)

@@ -39,6 +39,7 @@ def study_figures(
     plt = _pyplot()
     directory.mkdir(parents=True, exist_ok=True)
     rows = summary[summary["quantity"] == "stiffness_nm_per_rad"]
+    rows = rows.assign(**{key: rows[key].map(_tick) for key in varied})
     written = []
     keys: list[str | None] = [*varied] if varied else [None]
     for key in keys:
@@ -46,17 +47,19 @@ def study_figures(
         others = [k for k in varied if k != key]
         fig, (ax_bias, ax_rmse) = plt.subplots(1, 2, figsize=(10, 4), constrained_layout=True)
         lines = [("all", rows)] if key is None else list(rows.groupby(["direction", "delay_ms"]))
+        # one place per value for every line (a line may lack some: a grid of timing points)
+        where, ticks = _positions(sorted(rows[x_key].unique()))
         for label, group in lines:
             table = group.groupby(x_key, sort=True)[["bias_percent", "sd_percent", "rmse_percent"]]
             mean = table.mean()
-            xs, ticks = _positions(list(mean.index))
+            xs = [where[value] for value in mean.index]
             name = "" if key is None else f"{label[0]} {label[1]:g} ms"
             ax_bias.errorbar(xs, mean["bias_percent"], yerr=mean["sd_percent"], marker="o",
                              capsize=3, label=name)  # fmt: skip
             ax_rmse.plot(xs, mean["rmse_percent"], marker="o", label=name)
+        if ticks is not None:
             for ax in (ax_bias, ax_rmse):
-                if ticks is not None:
-                    ax.set_xticks(xs, ticks)
+                ax.set_xticks(list(where.values()), ticks)
         xlabel = "timing point, ms after heel contact" if key is None else _label(key)
         ax_bias.axhline(0.0, color="0.6", lw=0.8)
         ax_bias.set(xlabel=xlabel, ylabel="stiffness error, % of truth (mean ± sd over seeds)")
@@ -132,11 +135,17 @@ def group_figures(group: pd.DataFrame, pooled: pd.DataFrame, directory: Path) ->
     return written
 
 
-def _positions(values: list[Any]) -> tuple[list[float], list[str] | None]:
-    """Numbers are their own positions; anything else is placed 0, 1, 2... and labelled."""
+def _tick(value: Any) -> Any:
+    """A setting as the figures group it: a list or table (``timing_points_ms``) as its text."""
+    return str(value) if isinstance(value, list | tuple | dict) else value
+
+
+def _positions(values: list[Any]) -> tuple[dict[Any, float], list[str] | None]:
+    """Each value's place on the axis, and the tick labels: numbers are their own places;
+    anything else is placed 0, 1, 2... and labelled."""
     if all(isinstance(v, int | float) and not isinstance(v, bool) for v in values):
-        return [float(v) for v in values], None
-    return list(range(len(values))), [str(v) for v in values]
+        return {v: float(v) for v in values}, None
+    return {v: float(i) for i, v in enumerate(values)}, [str(v) for v in values]
 
 
 def _label(key: str) -> str:
