@@ -405,7 +405,7 @@ def test_an_unreadable_stored_result_is_named_and_computed_again(tmp_path):
     from anklelab.studies.execute import ResultStore
 
     store = ResultStore(tmp_path)
-    store.write("good", {"rows": [1, 2]})
+    store.write("good", {"ok": True, "rows": [1, 2]})
     (tmp_path / "cut.json").write_text('{"rows": [1, 2', encoding="utf-8")  # a file cut short
     (tmp_path / "list.json").write_text("[1, 2]", encoding="utf-8")
     assert store.has("good") and not store.has("missing")

@@ -152,7 +152,9 @@ def run_batch(
     names = session_names(paths)
     config = settings.model_dump(mode="json")
     keys = [_key(path, config) for path in paths]
-    results = ResultStore(out / "cells" if store is None else store)
+    results = ResultStore(
+        out / "cells" if store is None else store, fields=("subject", "document", "table")
+    )
     tasks = list(
         {
             k: Task(k, analyse_session_file, (str(p), settings))

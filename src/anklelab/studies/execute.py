@@ -59,34 +59,50 @@ class Task:
 
 
 class ResultStore:
-    """One JSON file per finished task under ``directory``."""
+    """One JSON file per finished task under ``directory``.
 
-    def __init__(self, directory: Path) -> None:
+    Parameters
+    ----------
+    directory : Path
+        Where the results are kept.
+    fields : tuple of str
+        What a task's value holds (``("rows",)`` for a study's sessions): a kept result that
+        lacks one of them, as one that is no :func:`attempt` record at all, is computed again.
+    """
+
+    def __init__(self, directory: Path, *, fields: tuple[str, ...] = ()) -> None:
         self.directory = Path(directory)
+        self.fields = fields
 
     def path(self, key: str) -> Path:
         return self.directory / f"{key}.json"
 
     def has(self, key: str) -> bool:
-        """Whether ``key``'s result is stored and readable; an unreadable one (a file cut short
+        """Whether ``key``'s result is stored and readable; an unreadable one (a file cut short,
         or edited by hand into something else) is named in a warning and computed again."""
         path = self.path(key)
         if not path.is_file():
             return False
         try:
-            readable = isinstance(self.read(key), dict)
+            problem = self._problem(json.loads(path.read_text(encoding="utf-8")))
         except (ValueError, UnicodeDecodeError) as exc:  # JSONDecodeError is a ValueError
-            readable = False
-            reason = f"{type(exc).__name__}: {exc}"
-        else:
-            reason = "not a JSON object"
-        if not readable:
+            problem = f"{type(exc).__name__}: {exc}"
+        if problem:
             warnings.warn(
-                f"{path}: an earlier run's result is unreadable ({reason}); computing it again",
+                f"{path}: an earlier run's result is unreadable ({problem}); computing it again",
                 AnklelabWarning,
                 stacklevel=2,
             )
-        return readable
+        return not problem
+
+    def _problem(self, record: Any) -> str:
+        """What keeps ``record`` from being a finished task's (empty when nothing does)."""
+        if not isinstance(record, dict):
+            return "not a JSON object"
+        if not isinstance(record.get("ok"), bool):
+            return "no 'ok' flag, true or false"
+        needed = self.fields if record["ok"] else ("error",)
+        return ", ".join(f"no {name!r}" for name in needed if name not in record)
 
     def read(self, key: str) -> dict[str, Any]:
         result: dict[str, Any] = json.loads(self.path(key).read_text(encoding="utf-8"))
@@ -179,7 +195,9 @@ def run_tasks(
         raise ParameterError(f"--workers: expected >= 1, got {workers}")
     todo = [task for task in tasks if not store.has(task.key)]
     done = len(tasks) - len(todo)
-    if not done and (stored := sum(1 for _ in store.directory.glob("*.json"))):
+    keys = {task.key for task in tasks}
+    others = [path for path in store.directory.glob("*.json") if path.stem not in keys]
+    if not done and (stored := len(others)):
         warnings.warn(
             f"{store.directory}: none of its {stored} stored results is for these sessions "
             f"(they have other settings, or were computed by another anklelab version or "

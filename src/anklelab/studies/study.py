@@ -72,7 +72,7 @@ def run_study(
     from anklelab.studies.cell import run_cell
 
     cells = study.cells()
-    results_store = ResultStore(out / "cells" if store is None else store)
+    results_store = ResultStore(out / "cells" if store is None else store, fields=("rows",))
     tasks = [Task(cell.key, run_cell, (cell,)) for cell in cells]  # distinct: Study.points
     run = run_tasks(
         tasks, results_store, scheduler=scheduler, workers=workers, retries=retries,

@@ -1,0 +1,43 @@
+"""Running tasks on Dask (:mod:`anklelab.studies.execute`): the store of finished tasks, retries,
+dead workers, workers of other code, and what a run leaves behind."""
+
+from __future__ import annotations
+
+import warnings
+
+import pytest
+
+from anklelab.errors import AnklelabWarning
+from anklelab.studies.execute import ResultStore, Task, run_tasks
+
+
+@pytest.mark.parametrize(
+    ("record", "reason"),
+    [
+        ({"ok": True}, r"no 'rows'"),
+        ({"ok": False}, r"no 'error'"),
+        ({"rows": []}, r"no 'ok'"),
+        ({"ok": "yes", "rows": []}, r"no 'ok'"),
+    ],
+)
+def test_a_kept_result_that_is_json_but_no_result_is_computed_again(tmp_path, record, reason):
+    """``{"ok": true}`` was taken for a finished session: the study then failed on a KeyError."""
+    store = ResultStore(tmp_path, fields=("rows",))
+    store.write("k", record)
+    with pytest.warns(AnklelabWarning, match=rf"k\.json: an earlier run's result is unreadable "
+                                             rf"\({reason}"):  # fmt: skip
+        assert not store.has("k")
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        run = run_tasks([Task("k", dict, ())], store, workers=1)
+    assert run["ran"] == 1
+    # the kept file is this task's: it is not "none of its stored results is for these tasks"
+    messages = [str(w.message) for w in caught]
+    assert len(messages) == 1 and "unreadable" in messages[0], messages
+
+
+def test_a_kept_result_or_failure_is_reused(tmp_path, recwarn):
+    store = ResultStore(tmp_path, fields=("rows",))
+    store.write("done", {"ok": True, "attempts": 1, "rows": []})
+    store.write("failed", {"ok": False, "attempts": 2, "error": "E: x"})
+    assert store.has("done") and store.has("failed") and not recwarn.list
