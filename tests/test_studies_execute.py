@@ -3,6 +3,7 @@ dead workers, workers of other code, and what a run leaves behind."""
 
 from __future__ import annotations
 
+import os
 import warnings
 
 import pytest
@@ -41,3 +42,19 @@ def test_a_kept_result_or_failure_is_reused(tmp_path, recwarn):
     store.write("done", {"ok": True, "attempts": 1, "rows": []})
     store.write("failed", {"ok": False, "attempts": 2, "error": "E: x"})
     assert store.has("done") and store.has("failed") and not recwarn.list
+
+
+def test_a_dead_worker_process_fails_its_task_and_the_others_go_on(tmp_path):
+    """On the default scheduler a worker process that died (out of memory, a crash) broke the
+    pool: the study ended in a BrokenProcessPool traceback, where a cluster records the task."""
+    store = ResultStore(tmp_path / "cells")
+    tasks = [Task("dies", os._exit, (1,)), *(Task(key, dict, ()) for key in "abc")]
+    run = run_tasks(tasks, store, workers=2, retries=1)
+    assert run["ran"] == 4
+    record = store.read("dies")
+    assert record == {
+        "ok": False,
+        "attempts": 2,
+        "error": "the worker process running it died (out of memory, or killed?)",
+    }
+    assert all(store.read(key) == {"ok": True, "attempts": 1} for key in "abc")

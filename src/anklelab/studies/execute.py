@@ -227,26 +227,73 @@ def run_tasks(
 def _run_local(
     tasks: list[Task], workers: int, retries: int, finished: Callable[[str, dict], None]
 ) -> None:
-    """Dask's local scheduler on a pool of spawned worker processes."""
+    """Dask's local scheduler on a pool of spawned worker processes.
+
+    A worker process that dies (out of memory, killed, a crash in compiled code) breaks the
+    pool, and every task running at that moment is a suspect. The suspects run again one at a
+    time, each on a fresh pool of one process, so that a death is charged to the task that
+    caused it: a task whose process died on each of its ``1 + retries`` tries is recorded as
+    failed (as on a cluster), and the others go on.
+    """
+    pending = {task.key: task for task in tasks}
+    deaths: dict[str, int] = {}
+    suspects: list[str] = []
+
+    def done(key: str, record: dict[str, Any]) -> None:
+        del pending[key]
+        finished(key, record)
+
+    while pending:
+        batch = [pending[key] for key in suspects or pending]
+        running = _run_pool(batch, 1 if suspects else workers, retries, done)
+        if len(running) > 1:
+            suspects = sorted(running)
+            continue
+        for key in running:
+            deaths[key] = deaths.get(key, 0) + 1
+            if deaths[key] > retries:
+                done(key, {"ok": False, "attempts": deaths[key], "error": _DIED})
+        suspects = [key for key in suspects if key in pending]
+
+
+_DIED = "the worker process running it died (out of memory, or killed?)"
+
+
+def _run_pool(
+    tasks: list[Task], workers: int, retries: int, finished: Callable[[str, dict], None]
+) -> set[str]:
+    """Run ``tasks`` on a fresh pool of ``workers`` spawned processes; the keys of the tasks that
+    were running when a worker process died (empty when every task finished)."""
     import multiprocessing
     from concurrent.futures import ProcessPoolExecutor
+    from concurrent.futures.process import BrokenProcessPool
 
     import dask.multiprocessing
 
     graph = {task.key: (attempt, task.func, task.args, retries) for task in tasks}
+    running: set[str] = set()
+
+    def started(key: str, dsk: Any, state: Any) -> None:
+        running.add(key)
 
     def written(key: str, result: dict, dsk: Any, state: Any, worker: Any) -> None:
+        running.discard(key)
         finished(key, result)
 
     # dask's local callbacks: (start, start_state, pretask, posttask, finish)
-    callbacks = [(None, None, None, written, None)]
-
-    with (
-        _environment(_ONE_THREAD),
-        ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context("spawn")) as pool,
-    ):
-        # chunksize 1: each result comes back (and is written) as soon as it is done
-        dask.multiprocessing.get(graph, list(graph), pool=pool, callbacks=callbacks, chunksize=1)
+    callbacks = [(None, None, started, written, None)]
+    try:
+        with (
+            _environment(_ONE_THREAD),
+            ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context("spawn")) as pool,
+        ):
+            # chunksize 1: each result comes back (and is written) as soon as it is done
+            dask.multiprocessing.get(
+                graph, list(graph), pool=pool, callbacks=callbacks, chunksize=1
+            )
+    except BrokenProcessPool:
+        return running
+    return set()
 
 
 def _run_distributed(
