@@ -8,7 +8,7 @@ import warnings
 
 import pytest
 
-from anklelab.errors import AnklelabWarning
+from anklelab.errors import AnklelabWarning, ParameterError
 from anklelab.studies.execute import ResultStore, Task, run_tasks
 
 
@@ -58,3 +58,26 @@ def test_a_dead_worker_process_fails_its_task_and_the_others_go_on(tmp_path):
         "error": "the worker process running it died (out of memory, or killed?)",
     }
     assert all(store.read(key) == {"ok": True, "attempts": 1} for key in "abc")
+
+
+def test_workers_of_other_anklelab_code_are_refused_naming_the_worker(tmp_path, monkeypatch):
+    """A worker running another anklelab (here: this process claims other code) computed cells
+    that were stored under this code's keys."""
+    import anklelab.studies.execute as execute
+
+    monkeypatch.setattr(execute, "code_fingerprint", lambda: "0123456789abcdef")
+    store = ResultStore(tmp_path / "cells")
+    match = (
+        r"^--scheduler local-cluster: worker tcp://127\.0\.0\.1:\d+ runs anklelab \S+ "
+        r"\(code [0-9a-f]{16}\); this command runs anklelab \S+ \(code 0123456789abcdef\)"
+    )
+    with pytest.raises(ParameterError, match=match):
+        run_tasks([Task("k", dict, ())], store, scheduler="local-cluster", workers=1)
+    assert not store.has("k")
+
+
+def test_a_worker_that_joins_with_other_code_fails_its_tasks():
+    from anklelab.studies.execute import _attempt_as
+
+    record = _attempt_as(("0.0", "0123456789abcdef"), dict, (), 1)
+    assert not record["ok"] and record["error"].startswith("this worker runs anklelab ")

@@ -33,6 +33,7 @@ from pathlib import Path
 from typing import Any
 
 from anklelab._atomic import write_text_atomic
+from anklelab._version import __version__, code_fingerprint
 from anklelab.errors import AnklelabWarning, ParameterError
 
 __all__ = [
@@ -310,8 +311,11 @@ def _run_distributed(
 
     logging.getLogger("distributed").setLevel(logging.ERROR)
     with _client(scheduler, workers, Client, LocalCluster) as client:
+        identity = _identity()
+        _check_workers(client, scheduler, identity)
         futures = client.map(
-            attempt,
+            _attempt_as,
+            [identity] * len(tasks),
             [task.func for task in tasks],
             [task.args for task in tasks],
             [retries] * len(tasks),
@@ -330,6 +334,49 @@ def _run_distributed(
                 record = {"ok": False, "attempts": retries + 1, "error": error}
             finished(future.key, record)
             future.release()
+
+
+def _identity() -> tuple[str, str]:
+    """This process's anklelab: its version and code fingerprint, which the tasks' keys hash."""
+    return __version__, code_fingerprint()
+
+
+def _describe(identity: tuple[str, str]) -> str:
+    return f"anklelab {identity[0]} (code {identity[1]})"
+
+
+def _check_workers(client: Any, scheduler: str, identity: tuple[str, str]) -> None:
+    """Refuse a cluster whose workers run other anklelab code than this process: their results
+    would be kept under this code's keys."""
+    for address, found in sorted(client.run(_identity, on_error="return").items()):
+        if isinstance(found, BaseException):
+            runs = f"cannot run anklelab ({type(found).__name__}: {found})"
+        elif tuple(found) != identity:
+            runs = f"runs {_describe(tuple(found))}"
+        else:
+            continue
+        raise ParameterError(
+            f"--scheduler {scheduler}: worker {address} {runs}; this command runs "
+            f"{_describe(identity)}. Give every worker the same anklelab (the same version "
+            "installed, or PYTHONPATH pointing at the same source tree)"
+        )
+
+
+def _attempt_as(
+    identity: tuple[str, str],
+    func: Callable[..., dict[str, Any]],
+    args: Sequence[Any],
+    retries: int,
+) -> dict[str, Any]:
+    """:func:`attempt`, on a worker running the anklelab ``identity`` names (a worker that joined
+    the cluster after :func:`_check_workers` may run other code: its tasks fail)."""
+    if _identity() != tuple(identity):
+        return {
+            "ok": False,
+            "attempts": 1,
+            "error": f"this worker runs {_describe(_identity())}, not {_describe(identity)}",
+        }
+    return attempt(func, args, retries)
 
 
 @contextmanager
