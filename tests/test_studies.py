@@ -626,3 +626,26 @@ def test_a_list_valued_setting_is_drawn_with_its_values_as_labels(tmp_path):
     written = study_figures(summary, [key, "twin.noise_scale"], tmp_path, title="lists")
     assert written[0].name == f"stiffness_error_vs_{key}.png"
     assert all(path.is_file() for path in written)
+
+
+def test_batch_sends_its_workers_absolute_paths(tmp_path, monkeypatch):
+    """A cluster's workers have their own working directory: relative paths failed every
+    session there."""
+    import anklelab.studies.batch as batch
+    from anklelab.pipelines.walking import WalkingSettings
+
+    sent = []
+
+    def run_tasks(tasks, store, **options):
+        for task in tasks:
+            sent.append(task.args[0])
+            store.write(task.key, {"ok": False, "attempts": 1, "error": "E: not run"})
+        return {"resumed": 0, "ran": len(tasks), "wall_s": 0.0}
+
+    monkeypatch.setattr(batch, "run_tasks", run_tasks)
+    (tmp_path / "S1").mkdir()
+    (tmp_path / "S1" / "day1.h5").write_bytes(b"")
+    monkeypatch.chdir(tmp_path)
+    run = batch.run_batch([Path("S1/./day1.h5")], tmp_path / "out", settings=WalkingSettings())
+    assert sent == [os.path.join(tmp_path, "S1", "day1.h5")]
+    assert run.failed == {"day1": "E: not run"}

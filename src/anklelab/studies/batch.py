@@ -17,7 +17,7 @@ directory holds, per session, ``sessions/NAME/results.json`` and ``results.csv``
 - ``figures/``: stiffness against timing point per subject, and pooled.
 
 Nothing here imports the twin or numba. On a cluster, the workers must see the session files
-at the same paths as this machine (a shared file system).
+at the same paths as this machine (a shared file system): each is sent by its absolute path.
 """
 
 from __future__ import annotations
@@ -155,9 +155,10 @@ def run_batch(
     results = ResultStore(
         out / "cells" if store is None else store, fields=("subject", "document", "table")
     )
+    # absolute paths: a cluster's workers have working directories of their own
     tasks = list(
         {
-            k: Task(k, analyse_session_file, (str(p), settings))
+            k: Task(k, analyse_session_file, (os.path.abspath(p), settings))
             for k, p in zip(keys, paths, strict=True)
         }.values()
     )
