@@ -81,3 +81,25 @@ def test_a_worker_that_joins_with_other_code_fails_its_tasks():
 
     record = _attempt_as(("0.0", "0123456789abcdef"), dict, (), 1)
     assert not record["ok"] and record["error"].startswith("this worker runs anklelab ")
+
+
+def test_kept_results_of_other_sessions_are_named_as_removed_when_the_run_completes(tmp_path):
+    """A command's hidden store of finished sessions is removed when its run completes: a
+    resumed run that can use none of them says so before they are lost."""
+    from anklelab.studies import checkpoint_for
+
+    store = ResultStore(checkpoint_for(tmp_path / "out"))
+    store.write("computed-by-other-code", {"ok": True})
+    match = (r"none of its 1 stored results is for these sessions .*: all 1 run; the kept "
+             r"sessions will be removed when this run completes")  # fmt: skip
+    with pytest.warns(AnklelabWarning, match=match):
+        run_tasks([Task("k", dict, ())], store, workers=1)
+
+
+def test_a_command_prints_warnings_as_warning_lines(capsys):
+    """Warnings came out as Python's ``FILE:LINE: AnklelabWarning: ...`` with source paths."""
+    from anklelab.commands.study import warning_lines
+
+    with warning_lines():
+        warnings.warn("kept results\n  are unreadable", AnklelabWarning, stacklevel=1)
+    assert capsys.readouterr().err == "warning: kept results are unreadable\n"

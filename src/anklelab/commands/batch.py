@@ -14,6 +14,7 @@ from anklelab.commands.study import (
     SchedulerOption,
     WorkersOption,
     resumable_output,
+    warning_lines,
 )
 
 __all__ = ["batch"]
@@ -50,6 +51,7 @@ def batch(
     settings = load_walking_settings(settings_file)
     inputs = [*sessions, *([settings_file] if settings_file else [])]
     with (
+        warning_lines(),
         resumable_output(out, command="batch", force=force, inputs=inputs) as (run, store),
         recording_progress() as task,
     ):

@@ -9,7 +9,12 @@ from typing import Annotated
 import typer
 
 from anklelab.commands._options import ForceOption, SettingsOption, finite
-from anklelab.commands.study import SchedulerOption, WorkersOption, resumable_output
+from anklelab.commands.study import (
+    SchedulerOption,
+    WorkersOption,
+    resumable_output,
+    warning_lines,
+)
 
 __all__ = ["design"]
 
@@ -92,6 +97,7 @@ def design(
         analysis = load_walking_settings(settings_file).model_dump(mode="json")
     inputs = [p for p in (params, settings_file) if p is not None]
     with (
+        warning_lines(),
         resumable_output(out, command="design", force=force, inputs=inputs) as (run, store),
         recording_progress() as task,
     ):

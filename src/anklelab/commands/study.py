@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import shutil
+import warnings
 from collections.abc import Iterator, Sequence
 from contextlib import contextmanager
 from pathlib import Path
@@ -24,6 +25,7 @@ __all__ = [
     "WorkersOption",
     "resumable_output",
     "study",
+    "warning_lines",
 ]
 
 SchedulerOption = Annotated[
@@ -74,6 +76,7 @@ def study(
 
     spec = load_study(check_input(study_file, what="a study file (TOML)", kinds=("file",)))
     with (
+        warning_lines(),
         resumable_output(out, command="study", force=force, inputs=[study_file]) as (run, store),
         recording_progress() as task,
     ):
@@ -93,6 +96,19 @@ def study(
         f"results in {out}"
     )
     _report_failures(result.failed)
+
+
+@contextmanager
+def warning_lines() -> Iterator[None]:
+    """Within the block, each warning is one ``warning: MESSAGE`` line on stderr, as the
+    command's own notes are (not Python's ``FILE:LINE: Category: message`` and source line)."""
+
+    def show(message: Warning | str, *args: object, **kwargs: object) -> None:
+        typer.echo(f"warning: {' '.join(str(message).split())}", err=True)
+
+    with warnings.catch_warnings():
+        warnings.showwarning = show
+        yield
 
 
 @contextmanager

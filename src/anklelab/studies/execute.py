@@ -134,7 +134,11 @@ def checkpoint_for(out: Path) -> Path:
     '/runs/.misalignment.anklelab-cells'
     """
     out = Path(os.path.abspath(out))
-    return out.parent / f".{out.name}.anklelab-cells"
+    return out.parent / f".{out.name}{_CHECKPOINT}"
+
+
+_CHECKPOINT = ".anklelab-cells"
+"""The suffix of :func:`checkpoint_for`'s directories."""
 
 
 def attempt(func: Callable[..., dict[str, Any]], args: Sequence[Any], retries: int) -> dict:
@@ -199,10 +203,12 @@ def run_tasks(
     keys = {task.key for task in tasks}
     others = [path for path in store.directory.glob("*.json") if path.stem not in keys]
     if not done and (stored := len(others)):
+        removed = store.directory.name.endswith(_CHECKPOINT)  # a command's: see checkpoint_for
         warnings.warn(
             f"{store.directory}: none of its {stored} stored results is for these sessions "
             f"(they have other settings, or were computed by another anklelab version or "
-            f"code): all {len(tasks)} run",
+            f"code): all {len(tasks)} run"
+            + ("; the kept sessions will be removed when this run completes" if removed else ""),
             AnklelabWarning,
             stacklevel=2,
         )
