@@ -15,7 +15,7 @@ import pandas as pd
 import pytest
 
 from anklelab._runs import RunManifest
-from anklelab.errors import ParameterError
+from anklelab.errors import AnklelabWarning, ParameterError
 from anklelab.studies import (
     attempt,
     checkpoint_for,
@@ -366,8 +366,9 @@ def test_design_table_shows_the_recommended_count_instead_of_a_neighbour(capsys)
         "half_width_percent": (33.0 / np.sqrt(n)).tolist(),
         "power": np.minimum(1.0, n / 50).tolist(),
         "recommended": 122,
-        "pilot": {"trials_per_point": [], "half_width_percent": [], "rms_error_percent": []},
+        "pilot": {key: [] for key in ("trials_per_point", "half_width_percent", "left_out")},
     }
+    curve["pilot"] |= {"fitted_half_width_percent": [], "rms_error_percent": []}
     _print_curve(curve, "ci95")
     rows = [line.split() for line in capsys.readouterr().out.splitlines()]
     counts = [int(row[0]) for row in rows if len(row) >= 3 and row[0].isdigit()]
@@ -415,29 +416,51 @@ def test_an_unreadable_stored_result_is_named_and_computed_again(tmp_path):
         assert not store.has("list")
 
 
-def test_the_design_fits_the_intervals_floor_and_names_a_target_below_it():
-    """Half-widths built as sqrt(100 / m + 2²) %: the fit finds c = 10 % and the 2 % floor that
-    more trials do not shrink; ±3 % then needs a condition's 9-in-10 share of trials to reach
-    20 (100 / 20 + 4 = 9), and ±1.5 % is out of reach."""
+def _pilot_rows(m: list[float], half_width: list[float], flagged: list[bool]) -> pd.DataFrame:
+    """Stiffness rows of one condition (dorsi/100), one per pilot interval of ``m`` trials."""
+    return pd.DataFrame(
+        {"twin.trials_per_point": 2 * np.asarray(m), "seed": range(len(m)), "direction": "dorsi",
+         "delay_ms": 100.0, "n_perturbed": m, "half_width_percent": half_width,
+         "poorly_determined": flagged, "error_percent": 0.0, "interval_kind": "ci95"}
+    )  # fmt: skip
+
+
+def test_the_design_curve_follows_the_pilots_well_determined_intervals():
+    """Least squares on the squared half-widths followed the smallest pilot's widest intervals
+    and over-recommended. Here the larger pilots' intervals are exactly 10 % / sqrt(m); the
+    smallest pilot has one wide interval and one the analysis flagged as poorly determined."""
     from scipy.stats import binom
 
     from anklelab.studies.design import _answer
 
-    m = np.array([4.0, 8.0, 16.0, 32.0, 64.0])
-    rows = pd.DataFrame(
-        {"twin.trials_per_point": 2 * m, "seed": 0, "direction": "dorsi", "delay_ms": 100.0,
-         "n_perturbed": m, "half_width_percent": np.sqrt(100.0 / m + 4.0),
-         "error_percent": 0.0, "interval_kind": "ci95"}
-    )  # fmt: skip
+    m = [4.0, 4.0, 16.0, 16.0, 32.0, 32.0]
+    widths = [30.0, 80.0, *(10.0 / np.sqrt(m[2:]))]
+    rows = _pilot_rows(m, widths, [False, True, False, False, False, False])
     design = _answer(rows, None, target=3.0, change=10.0, power=0.8)
     (condition,) = design.conditions
-    assert condition["c_percent"] == pytest.approx(10.0) and condition["floor_percent"] == (
-        pytest.approx(2.0)
-    )
-    n = design.for_interval
-    assert binom.ppf(0.1, n, 0.5) >= 20 > binom.ppf(0.1, n - 1, 0.5)
-    with pytest.raises(ParameterError, match=r"±1\.5 % is out of reach at dorsi/100: .*±2\.00 %"):
-        _answer(rows, None, target=1.5, change=10.0, power=0.8)
+    assert condition["c_percent"] == pytest.approx(10.0) and condition["intervals"] == 5
+    n = design.for_interval  # a condition's 9-in-10 share of n trials: 100 / 3² = 11.1 or more
+    assert binom.ppf(0.1, n, 0.5) >= 12 > binom.ppf(0.1, n - 1, 0.5)
+    pilot = design.curve["pilot"]
+    assert pilot["left_out"] == [1, 0, 0] and pilot["half_width_percent"][0] == 30.0
+    # the fit against the same intervals: exact where they are c / sqrt(m)
+    assert pilot["fitted_half_width_percent"] == pytest.approx([5.0, 2.5, 10.0 / np.sqrt(32)])
+    assert pilot["half_width_percent"][1:] == pytest.approx(pilot["fitted_half_width_percent"][1:])
+
+
+def test_the_design_names_an_extrapolation_and_stops_at_the_twins_1000_trials():
+    from anklelab.studies.design import DesignError, _answer
+
+    m = [16.0, 16.0, 32.0, 32.0]  # pilots of 32 and 64 trials per point
+    rows = _pilot_rows(m, list(10.0 / np.sqrt(m)), [False] * 4)
+    with pytest.warns(AnklelabWarning, match=r"design: the recommended \d+ trials per timing "
+                                             r"point are more than 2 times the largest pilot "
+                                             r"\(64\): the curve is extrapolated"):  # fmt: skip
+        design = _answer(rows, None, target=0.5, change=10.0, power=0.8)
+    assert design.recommended > 500 and design.curve["trials_per_point"][-1] == 1000
+    with pytest.raises(DesignError, match=r"±0\.3 % is out of reach at dorsi/100: .*more than "
+                                          r"the twin's 1000 trials per timing point"):  # fmt: skip
+        _answer(rows, None, target=0.3, change=10.0, power=0.8)
 
 
 def test_a_grid_point_whose_every_session_failed_stays_in_the_summary():

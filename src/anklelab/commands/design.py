@@ -144,7 +144,11 @@ def _print_curve(curve: dict, kind: str) -> None:
                       f"{100 * curve['power'][i]:.0f}", mark)  # fmt: skip
     Console().print(table)
     pilot = curve["pilot"]
-    for n_pilot, width, rms in zip(pilot["trials_per_point"], pilot["half_width_percent"],
-                                   pilot["rms_error_percent"], strict=True):  # fmt: skip
-        typer.echo(f"pilot {n_pilot:4d} trials per point: reported half-width {width:.2f} %, "
-                   f"RMS error against the truth {rms:.2f} %")  # fmt: skip
+    for n_pilot, width, fitted, left_out, rms in zip(
+        pilot["trials_per_point"], pilot["half_width_percent"],
+        pilot["fitted_half_width_percent"], pilot["left_out"], pilot["rms_error_percent"],
+        strict=True,
+    ):  # fmt: skip
+        vague = f"; {left_out} poorly determined left out" if left_out else ""
+        typer.echo(f"pilot {n_pilot:4d} trials per point: half-width {width:.2f} % (fit "
+                   f"{fitted:.2f} %{vague}), RMS error against the truth {rms:.2f} %")  # fmt: skip

@@ -84,7 +84,10 @@ def design_figure(curve: dict[str, Any], path: Path) -> Path:
     fig, (ax_w, ax_p) = plt.subplots(1, 2, figsize=(10, 4), constrained_layout=True)
     ax_w.plot(n, curve["half_width_percent"], label="predicted (widest condition)")
     pilot = curve["pilot"]
-    ax_w.plot(pilot["trials_per_point"], pilot["half_width_percent"], "o", label="pilot sessions")
+    ax_w.plot(pilot["trials_per_point"], pilot["half_width_percent"], "o",
+              label="pilot sessions (widest interval, mean)")  # fmt: skip
+    ax_w.plot(pilot["trials_per_point"], pilot["fitted_half_width_percent"], "x", color="C1",
+              label="the fit of the same intervals")  # fmt: skip
     ax_w.axhline(curve["target_percent"], color="C3", ls="--", label="target")
     ax_p.plot(n, np.asarray(curve["power"]) * 100)
     ax_p.axhline(curve["target_power"] * 100, color="C3", ls="--")
