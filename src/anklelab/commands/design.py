@@ -84,17 +84,19 @@ def design(
     from anklelab.pipelines.walking import load_walking_settings
     from anklelab.platforms import load_platform
     from anklelab.studies import design_trials
-    from anklelab.studies.design import check_targets
+    from anklelab.studies.design import check_targets, pilot_study
 
     try:
         counts = [int(n) for n in pilot.split(",")]
     except ValueError:
         raise ParameterError(f"--pilot: expected counts like 10,20,40, got {pilot!r}") from None
-    check_targets(interval, change, power, counts, seeds)
+    counts = check_targets(interval, change, power, counts, seeds)
     parameters = load_platform("perturberator", params)
     analysis = {}
     if settings_file is not None:  # checked now, not in every pilot session
         analysis = load_walking_settings(settings_file).model_dump(mode="json")
+    # the whole pilot study is checked before the output is staged
+    pilot_study(counts, foot=foot.value, params_file=params, seeds=seeds, analysis=analysis)
     inputs = [p for p in (params, settings_file) if p is not None]
     with (
         warning_lines(),

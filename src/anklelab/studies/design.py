@@ -45,10 +45,10 @@ import numpy as np
 
 from anklelab._session_limits import MAX_TRIALS_PER_POINT
 from anklelab.errors import AnklelabWarning, ParameterError
-from anklelab.studies.spec import study_from_mapping
+from anklelab.studies.spec import Study, study_from_mapping
 from anklelab.studies.study import StudyRun, run_study
 
-__all__ = ["Design", "DesignError", "check_targets", "design_trials"]
+__all__ = ["Design", "DesignError", "check_targets", "design_trials", "pilot_study"]
 
 
 class DesignError(ParameterError):
@@ -149,17 +149,10 @@ def design_trials(
         As for :func:`anklelab.studies.run_study`.
     """
     counts = check_targets(interval_percent, change_percent, power, pilot, seeds)
-    document: dict[str, Any] = {
-        "name": "design",
-        "seeds": seeds,
-        "twin": {"foot": foot, "bench": False, "unperturbed_per_point": _ratio(params_file)}
-        | ({"n_calibration": n_calibration} if n_calibration else {}),
-        "analysis": dict(analysis or {}),
-        "grid": {"twin.trials_per_point": counts},
-    }
-    if params_file is not None:
-        document["params_file"] = str(Path(params_file).resolve())
-    study = study_from_mapping(document, origin="design")
+    study = pilot_study(
+        counts, foot=foot, params_file=params_file, seeds=seeds, analysis=analysis,
+        n_calibration=n_calibration,
+    )  # fmt: skip
     run = run_study(
         study, out, store=store, scheduler=scheduler, workers=workers, figures=False,
         progress=progress,
@@ -194,11 +187,41 @@ def check_targets(
     if not 0 < power < 1:
         raise ParameterError(f"--power: expected 0 < power < 1, got {power:g}")
     counts = sorted({int(n) for n in pilot})
-    if len(counts) < 2 or counts[0] < 2:
-        raise ParameterError(f"--pilot: expected two or more counts >= 2, got {list(pilot)}")
+    if len(counts) < 2 or counts[0] < 2 or counts[-1] > MAX_TRIALS_PER_POINT:
+        raise ParameterError(
+            f"--pilot: expected two or more counts from 2 to {MAX_TRIALS_PER_POINT} trials per "
+            f"timing point, got {list(pilot)}"
+        )
     if seeds < 1:
         raise ParameterError(f"--seeds: expected >= 1, got {seeds}")
     return counts
+
+
+def pilot_study(
+    counts: Sequence[int],
+    *,
+    foot: str = "prosthetic",
+    params_file: Path | None = None,
+    seeds: int = 2,
+    analysis: dict[str, Any] | None = None,
+    n_calibration: int | None = None,
+) -> Study:
+    """The pilot study of :func:`design_trials` (its parameters), checked as a study file is:
+    a command builds it before it stages its output, so that nothing is written if it fails.
+
+    ``counts`` are the pilot's trials per timing point (see :func:`check_targets`).
+    """
+    document: dict[str, Any] = {
+        "name": "design",
+        "seeds": seeds,
+        "twin": {"foot": foot, "bench": False, "unperturbed_per_point": _ratio(params_file)}
+        | ({"n_calibration": n_calibration} if n_calibration else {}),
+        "analysis": dict(analysis or {}),
+        "grid": {"twin.trials_per_point": list(counts)},
+    }
+    if params_file is not None:
+        document["params_file"] = str(Path(params_file).resolve())
+    return study_from_mapping(document, origin="design")
 
 
 def _ratio(params_file: Path | None) -> float:

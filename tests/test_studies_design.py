@@ -1,0 +1,41 @@
+"""``anklelab design`` as a command: its options checked before any output, and what a failed
+design leaves behind."""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+from anklelab.studies import checkpoint_for
+
+
+def _anklelab(args: list[str], monkeypatch, capsys) -> tuple[int, str, str]:
+    """Run the ``anklelab`` entry point in-process: (exit code, stdout, stderr)."""
+    from anklelab.cli import run
+
+    monkeypatch.setattr(sys, "argv", ["anklelab", *args])
+    capsys.readouterr()
+    try:
+        run()
+        code = 0
+    except SystemExit as exit:
+        code = exit.code if isinstance(exit.code, int) else 1
+    captured = capsys.readouterr()
+    return code, captured.out, captured.err
+
+
+def test_a_pilot_count_beyond_the_twin_names_the_option_before_any_output(
+    tmp_path: Path, monkeypatch, capsys
+):
+    """``--pilot 10,2000`` was refused by the pilot study's internal key, twin.trials_per_point,
+    once the output was staged."""
+    out = tmp_path / "design"
+    code, _, err = _anklelab(
+        ["design", "--out", str(out), "--pilot", "10,2000"], monkeypatch, capsys
+    )
+    assert code == 2
+    assert err.strip().splitlines() == [
+        "error: --pilot: expected two or more counts from 2 to 1000 trials per timing point, "
+        "got [10, 2000]"
+    ]
+    assert list(tmp_path.iterdir()) == [] and not checkpoint_for(out).exists()
