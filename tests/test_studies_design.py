@@ -39,3 +39,17 @@ def test_a_pilot_count_beyond_the_twin_names_the_option_before_any_output(
         "got [10, 2000]"
     ]
     assert list(tmp_path.iterdir()) == [] and not checkpoint_for(out).exists()
+
+
+def test_a_target_out_of_reach_leaves_no_scratch_directory(tmp_path: Path, monkeypatch, capsys):
+    """The pilot ran, then ±0.1 % was out of reach: the kept pilot sessions stayed behind in
+    the hidden directory beside the output, which only a resumed run would use."""
+    settings = tmp_path / "settings.toml"
+    settings.write_text("bootstrap_reps = 10\n", encoding="utf-8")
+    out = tmp_path / "design"
+    args = ["design", "--out", str(out), "--pilot", "3,4", "--seeds", "1", "--interval", "0.1",
+            "--settings", str(settings), "--workers", "1"]  # fmt: skip
+    code, _, err = _anklelab(args, monkeypatch, capsys)
+    assert code == 2
+    assert err.strip().splitlines()[-1].startswith("error: design: ±0.1 % is out of reach at ")
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["settings.toml"]

@@ -84,7 +84,7 @@ def design(
     from anklelab.pipelines.walking import load_walking_settings
     from anklelab.platforms import load_platform
     from anklelab.studies import design_trials
-    from anklelab.studies.design import check_targets, pilot_study
+    from anklelab.studies.design import DesignError, check_targets, pilot_study
 
     try:
         counts = [int(n) for n in pilot.split(",")]
@@ -100,7 +100,9 @@ def design(
     inputs = [p for p in (params, settings_file) if p is not None]
     with (
         warning_lines(),
-        resumable_output(out, command="design", force=force, inputs=inputs) as (run, store),
+        resumable_output(
+            out, command="design", force=force, inputs=inputs, discard_on=(DesignError,)
+        ) as (run, store),
         recording_progress() as task,
     ):
         if scheduler is None:

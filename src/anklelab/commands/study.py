@@ -113,21 +113,31 @@ def warning_lines() -> Iterator[None]:
 
 @contextmanager
 def resumable_output(
-    out: Path, *, command: str, force: bool, inputs: Sequence[Path]
+    out: Path,
+    *,
+    command: str,
+    force: bool,
+    inputs: Sequence[Path],
+    discard_on: tuple[type[BaseException], ...] = (),
 ) -> Iterator[tuple[Run, Path]]:
     """The checked, locked output directory of ``command`` and the store its tasks resume from.
 
     Yields the run (see :func:`anklelab.commands._files.output_directory`: OUT is built under a
     temporary name and appears, with its run.json, only when the command completes) and the
     store of finished tasks kept beside OUT (:func:`anklelab.studies.checkpoint_for`), which
-    outlives a stopped run and is removed once OUT is in place.
+    outlives a stopped run and is removed once OUT is in place, or when the command fails with
+    one of ``discard_on``: errors that running the same tasks again would meet again.
     """
     from anklelab.commands._files import output_directory
     from anklelab.studies import checkpoint_for
 
     store = checkpoint_for(out)
-    with output_directory(out, command=command, force=force, inputs=inputs) as run:
-        yield run, store
+    try:
+        with output_directory(out, command=command, force=force, inputs=inputs) as run:
+            yield run, store
+    except discard_on:
+        shutil.rmtree(store, ignore_errors=True)
+        raise
     shutil.rmtree(store, ignore_errors=True)
 
 
