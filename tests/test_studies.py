@@ -672,3 +672,28 @@ def test_batch_sends_its_workers_absolute_paths(tmp_path, monkeypatch):
     run = batch.run_batch([Path("S1/./day1.h5")], tmp_path / "out", settings=WalkingSettings())
     assert sent == [os.path.join(tmp_path, "S1", "day1.h5")]
     assert run.failed == {"day1": "E: not run"}
+
+
+def test_a_second_run_computes_only_the_sessions_that_failed(tmp_path):
+    """A completed study with failed sessions could only be run again whole (--force); the same
+    command now computes only the failed ones and replaces the output."""
+    study_file = tmp_path / "fails.toml"
+    text = TINY_TOML.replace("seeds = [0, 1]", "seeds = [0]").replace(
+        '"params.geometry.misalignment_anterior_m" = [0.0, 0.016]',
+        '"twin.noise_scale" = [1.0, 100000.0]',  # the second drowns the plate in noise
+    )
+    study_file.write_text(text, encoding="utf-8")
+    target = tmp_path / "out"
+    command = [sys.executable, "-c", "from anklelab.cli import run; run()", "study",
+               str(study_file), "--out", str(target), "--workers", "1", "--retries", "0",
+               "--no-figures"]  # fmt: skip
+    first = subprocess.run(command, capture_output=True, text=True, timeout=300)
+    assert first.returncode == 1, first.stderr
+    failed = pd.read_csv(target / "cells.csv").query("status == 'failed'")["cell"].tolist()
+    assert len(failed) == 1
+    second = subprocess.run(command, capture_output=True, text=True, timeout=300)
+    assert second.returncode == 1, second.stderr  # the noise is as loud the second time
+    assert f"{target}: computing its 1 failed session again (1 kept)" in second.stdout
+    assert "(1 already done, 1 run)" in second.stdout
+    assert pd.read_csv(target / "cells.csv")["attempts"].tolist() == [1, 1]
+    assert not checkpoint_for(target).exists()

@@ -66,20 +66,31 @@ def study(
     model), OUT/summary.parquet and .csv (bias, sd, RMSE, coverage per cell), OUT/cells.csv
     (status, error and times per session), OUT/cells/ (each session's result), OUT/figures/ and
     OUT/run.json. OUT appears when the study completes; run the same command again to resume
-    a study that was stopped.
+    a study that was stopped, or, once it has completed, to compute its failed sessions again.
     """
     from anklelab.commands._files import check_input
     from anklelab.commands._kernels import prepare_kernel
     from anklelab.commands._progress_bars import recording_progress
     from anklelab.platforms import load_platform
-    from anklelab.studies import load_study, run_study
+    from anklelab.studies import ResultStore, load_study, run_study
+    from anklelab.studies.execute import failed_tasks
 
     spec = load_study(check_input(study_file, what="a study file (TOML)", kinds=("file",)))
+    keys = [cell.key for cell in spec.cells()]
+    retry = [] if force else failed_tasks(out, "study", keys)
+    replace = force or bool(retry)
     with (
         warning_lines(),
-        resumable_output(out, command="study", force=force, inputs=[study_file]) as (run, store),
+        resumable_output(out, command="study", force=replace, inputs=[study_file]) as (run, store),
         recording_progress() as task,
     ):
+        if retry:  # the same study completed with failures: keep its other sessions
+            kept = [key for key in keys if key not in retry]
+            ResultStore(out / "cells").copy_into(kept, store)
+            typer.echo(
+                f"{out}: computing its {len(retry)} failed session"
+                f"{'' if len(retry) == 1 else 's'} again ({len(kept)} kept)"
+            )
         if scheduler is None:  # local workers share this machine's kernel cache
             prepare_kernel(load_platform("perturberator"), task)
         result = run_study(

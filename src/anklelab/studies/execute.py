@@ -43,6 +43,7 @@ __all__ = [
     "attempt",
     "checkpoint_for",
     "default_workers",
+    "failed_tasks",
     "run_tasks",
 ]
 
@@ -139,6 +140,27 @@ def checkpoint_for(out: Path) -> Path:
 
 _CHECKPOINT = ".anklelab-cells"
 """The suffix of :func:`checkpoint_for`'s directories."""
+
+
+def failed_tasks(out: Path, command: str, keys: Sequence[str]) -> list[str]:
+    """The tasks to compute again when ``command`` runs into ``out`` once more.
+
+    When ``out`` is a completed output of ``command`` whose ``cells/`` hold the results of
+    exactly ``keys`` (the same tasks: same settings, same anklelab code), the keys whose result
+    is a failure (or unreadable); else, or when none failed, an empty list.
+    """
+    from anklelab._runs import RunManifest
+    from anklelab.errors import ResultsFormatError
+
+    kept = ResultStore(out / "cells")
+    try:
+        manifest = RunManifest.load(out)
+    except ResultsFormatError:
+        return []
+    stored = {path.stem for path in kept.directory.glob("*.json")}
+    if manifest is None or manifest.command != command or stored != set(keys):
+        return []
+    return [key for key in keys if not (kept.has(key) and kept.read(key)["ok"])]
 
 
 def attempt(func: Callable[..., dict[str, Any]], args: Sequence[Any], retries: int) -> dict:
