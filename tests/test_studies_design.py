@@ -53,3 +53,13 @@ def test_a_target_out_of_reach_leaves_no_scratch_directory(tmp_path: Path, monke
     assert code == 2
     assert err.strip().splitlines()[-1].startswith("error: design: ±0.1 % is out of reach at ")
     assert sorted(p.name for p in tmp_path.iterdir()) == ["settings.toml"]
+
+
+def test_workers_with_a_running_cluster_are_refused_before_any_output(
+    tmp_path: Path, monkeypatch, capsys
+):
+    out = tmp_path / "design"
+    args = ["design", "--out", str(out), "--scheduler", "tcp://127.0.0.1:9", "--workers", "2"]
+    code, _, err = _anklelab(args, monkeypatch, capsys)
+    assert code == 2 and err.startswith("error: --workers: a running Dask cluster")
+    assert list(tmp_path.iterdir()) == []

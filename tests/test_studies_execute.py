@@ -103,3 +103,16 @@ def test_a_command_prints_warnings_as_warning_lines(capsys):
     with warning_lines():
         warnings.warn("kept results\n  are unreadable", AnklelabWarning, stacklevel=1)
     assert capsys.readouterr().err == "warning: kept results are unreadable\n"
+
+
+def test_workers_with_a_running_cluster_are_refused(tmp_path):
+    """``--workers`` was ignored without a word with ``--scheduler tcp://...``: a running
+    cluster has the workers it has."""
+    from anklelab.studies.execute import check_scheduler
+
+    match = r"^--workers: a running Dask cluster \(--scheduler tcp://127\.0\.0\.1:9\) has its own"
+    with pytest.raises(ParameterError, match=match):
+        run_tasks([Task("k", dict, ())], ResultStore(tmp_path), scheduler="tcp://127.0.0.1:9",
+                  workers=2)  # fmt: skip
+    check_scheduler("local-cluster", 2)
+    check_scheduler("tcp://127.0.0.1:9", None)

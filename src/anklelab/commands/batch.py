@@ -45,9 +45,11 @@ def batch(
     from anklelab.commands._progress_bars import recording_progress
     from anklelab.pipelines.walking import load_walking_settings
     from anklelab.studies import run_batch
+    from anklelab.studies.execute import check_scheduler
 
     for path in sessions:
         session_input(path)
+    check_scheduler(scheduler, workers)
     settings = load_walking_settings(settings_file)
     inputs = [*sessions, *([settings_file] if settings_file else [])]
     with (

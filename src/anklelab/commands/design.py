@@ -85,12 +85,14 @@ def design(
     from anklelab.platforms import load_platform
     from anklelab.studies import design_trials
     from anklelab.studies.design import DesignError, check_targets, pilot_study
+    from anklelab.studies.execute import check_scheduler
 
     try:
         counts = [int(n) for n in pilot.split(",")]
     except ValueError:
         raise ParameterError(f"--pilot: expected counts like 10,20,40, got {pilot!r}") from None
     counts = check_targets(interval, change, power, counts, seeds)
+    check_scheduler(scheduler, workers)
     parameters = load_platform("perturberator", params)
     analysis = {}
     if settings_file is not None:  # checked now, not in every pilot session

@@ -73,9 +73,10 @@ def study(
     from anklelab.commands._progress_bars import recording_progress
     from anklelab.platforms import load_platform
     from anklelab.studies import ResultStore, load_study, run_study
-    from anklelab.studies.execute import failed_tasks
+    from anklelab.studies.execute import check_scheduler, failed_tasks
 
     spec = load_study(check_input(study_file, what="a study file (TOML)", kinds=("file",)))
+    check_scheduler(scheduler, workers)
     keys = [cell.key for cell in spec.cells()]
     retry = [] if force else failed_tasks(out, "study", keys)
     replace = force or bool(retry)

@@ -41,6 +41,7 @@ __all__ = [
     "ResultStore",
     "Task",
     "attempt",
+    "check_scheduler",
     "checkpoint_for",
     "default_workers",
     "failed_tasks",
@@ -178,6 +179,19 @@ def attempt(func: Callable[..., dict[str, Any]], args: Sequence[Any], retries: i
     return {"ok": False, "attempts": retries + 1, "error": error}
 
 
+def check_scheduler(scheduler: str | None, workers: int | None) -> None:
+    """Check :func:`run_tasks`'s ``scheduler`` and ``workers`` together, before any work:
+    ``workers`` is for this machine's pools only; a running cluster has the workers it has.
+    (Whether a scheduler answers at the address is known only once it is asked.)"""
+    if workers is not None and workers < 1:
+        raise ParameterError(f"--workers: expected >= 1, got {workers}")
+    if workers is not None and scheduler not in (None, LOCAL_CLUSTER):
+        raise ParameterError(
+            f"--workers: a running Dask cluster (--scheduler {scheduler}) has its own workers; "
+            f"give --workers only with the default scheduler or --scheduler {LOCAL_CLUSTER}"
+        )
+
+
 def default_workers() -> int:
     """Worker processes by default: the CPUs this process may use."""
     if hasattr(os, "sched_getaffinity"):
@@ -218,8 +232,7 @@ def run_tasks(
     """
     if retries < 0:
         raise ParameterError(f"retries: expected >= 0, got {retries}")
-    if workers is not None and workers < 1:
-        raise ParameterError(f"--workers: expected >= 1, got {workers}")
+    check_scheduler(scheduler, workers)
     todo = [task for task in tasks if not store.has(task.key)]
     done = len(tasks) - len(todo)
     keys = {task.key for task in tasks}
