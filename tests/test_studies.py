@@ -697,3 +697,18 @@ def test_a_second_run_computes_only_the_sessions_that_failed(tmp_path):
     assert "(1 already done, 1 run)" in second.stdout
     assert pd.read_csv(target / "cells.csv")["attempts"].tolist() == [1, 1]
     assert not checkpoint_for(target).exists()
+
+
+def test_a_session_given_twice_is_named_as_typed(tmp_path, monkeypatch):
+    """``batch S/./x.h5 S/x.h5`` said "S/x.h5 is S/x.h5 given again": the paths were
+    normalised before they were named."""
+    from typer.testing import CliRunner
+
+    from anklelab.cli import app
+
+    (tmp_path / "S").mkdir()
+    (tmp_path / "S" / "x.h5").write_bytes(b"")
+    monkeypatch.chdir(tmp_path)
+    result = CliRunner().invoke(app, ["batch", "S/./x.h5", "S/x.h5", "--out", "out"])
+    assert str(result.exception) == "SESSIONS: S/x.h5 is S/./x.h5 given again"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["S"]
