@@ -116,3 +116,16 @@ def test_workers_with_a_running_cluster_are_refused(tmp_path):
                   workers=2)  # fmt: skip
     check_scheduler("local-cluster", 2)
     check_scheduler("tcp://127.0.0.1:9", None)
+
+
+def test_a_local_cluster_leaves_nothing_in_the_temporary_directory(tmp_path, monkeypatch):
+    """Dask's workers kept their scratch space in TMPDIR/dask-scratch-space, left behind."""
+    import tempfile
+
+    scratch = tmp_path / "tmp"
+    scratch.mkdir()
+    monkeypatch.setenv("TMPDIR", str(scratch))
+    monkeypatch.setattr(tempfile, "tempdir", None)  # read TMPDIR again
+    store = ResultStore(tmp_path / "cells")
+    run_tasks([Task("k", dict, ())], store, scheduler="local-cluster", workers=1)
+    assert store.has("k") and list(scratch.iterdir()) == []

@@ -24,6 +24,7 @@ from __future__ import annotations
 import json
 import os
 import shutil
+import tempfile
 import time
 import warnings
 from collections.abc import Callable, Iterator, Sequence
@@ -422,12 +423,23 @@ def _attempt_as(
 
 @contextmanager
 def _client(scheduler: str, workers: int, client_type: Any, cluster_type: Any) -> Iterator[Any]:
+    """A client of the cluster at ``scheduler``, or of a local cluster whose workers keep their
+    scratch space in a temporary directory of their own, removed with the cluster (Dask's
+    default, ``TMPDIR/dask-scratch-space``, stays behind)."""
     if scheduler == LOCAL_CLUSTER:
-        with cluster_type(
-            n_workers=workers, threads_per_worker=1, processes=True, protocol="tcp",
-            host="127.0.0.1", dashboard_address=None,
-            preload=["anklelab.studies._worker_setup"],
-        ) as cluster, client_type(cluster) as client:  # fmt: skip
+        import dask
+
+        with (
+            tempfile.TemporaryDirectory(prefix="anklelab-dask-", ignore_cleanup_errors=True)
+            as scratch,
+            dask.config.set({"temporary-directory": scratch}),
+            cluster_type(
+                n_workers=workers, threads_per_worker=1, processes=True, protocol="tcp",
+                host="127.0.0.1", dashboard_address=None, local_directory=scratch,
+                preload=["anklelab.studies._worker_setup"],
+            ) as cluster,
+            client_type(cluster) as client,
+        ):  # fmt: skip
             yield client
         return
     try:
