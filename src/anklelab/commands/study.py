@@ -78,30 +78,31 @@ def study(
     spec = load_study(check_input(study_file, what="a study file (TOML)", kinds=("file",)))
     check_scheduler(scheduler, workers)
     keys = [cell.key for cell in spec.cells()]
-    retry = [] if force else failed_tasks(out, "study", keys)
-    replace = force or bool(retry)
-    with (
-        warning_lines(),
-        resumable_output(out, command="study", force=replace, inputs=[study_file]) as (run, store),
-        recording_progress() as task,
-    ):
-        if retry:  # the same study completed with failures: keep its other sessions
-            kept = [key for key in keys if key not in retry]
-            ResultStore(out / "cells").copy_into(kept, store)
-            typer.echo(
-                f"{out}: computing its {len(retry)} failed session"
-                f"{'' if len(retry) == 1 else 's'} again ({len(kept)} kept)"
-            )
-        if scheduler is None:  # local workers share this machine's kernel cache
-            prepare_kernel(load_platform("perturberator"), task)
-        result = run_study(
-            spec, run.directory, store=store, scheduler=scheduler, workers=workers,
-            retries=retries, figures=figures, progress=task(f"{spec.name}: sessions"),
-        )  # fmt: skip
-        run.settings.update(study=spec.describe(), retries=retries, figures=figures)
-        run.add_input(study_file)
-        if spec.params_file is not None:
-            run.add_input(Path(spec.params_file["path"]), spec.params_file["sha256"])
+    with warning_lines():  # a kept session that is unreadable is named as it is read
+        retry = [] if force else failed_tasks(out, "study", keys)
+        with (
+            resumable_output(
+                out, command="study", force=force or bool(retry), inputs=[study_file]
+            ) as (run, store),
+            recording_progress() as task,
+        ):  # fmt: skip
+            if retry:  # the same study completed with failures: keep its other sessions
+                kept = [key for key in keys if key not in retry]
+                ResultStore(out / "cells").copy_into(kept, store)
+                typer.echo(
+                    f"{out}: computing its {len(retry)} failed session"
+                    f"{'' if len(retry) == 1 else 's'} again ({len(kept)} kept)"
+                )
+            if scheduler is None:  # local workers share this machine's kernel cache
+                prepare_kernel(load_platform("perturberator"), task)
+            result = run_study(
+                spec, run.directory, store=store, scheduler=scheduler, workers=workers,
+                retries=retries, figures=figures, progress=task(f"{spec.name}: sessions"),
+            )  # fmt: skip
+            run.settings.update(study=spec.describe(), retries=retries, figures=figures)
+            run.add_input(study_file)
+            if spec.params_file is not None:
+                run.add_input(Path(spec.params_file["path"]), spec.params_file["sha256"])
     _print_summary(result.summary, spec.varied, result.results)
     typer.echo(
         f"{len(result.cells)} sessions ({result.resumed} already done, {result.ran} run); "
