@@ -536,7 +536,8 @@ def _analysis_misfit(params: Any, analysis: Any) -> str:
 
 def _canonical_text(content: Any) -> str:
     """``content`` as JSON in one spelling per value: keys sorted, tuples as lists, a whole
-    float as the integer it equals (``100.0`` as ``100``: every setting takes either).
+    float as the integer it equals (``100.0`` as ``100``: the same value of a number setting,
+    and an integer setting refuses ``100.0`` before any cell runs).
 
     >>> _canonical_text({"b": (1.0, 2.5), "a": 100})
     '{"a": 100, "b": [1, 2.5]}'
