@@ -436,13 +436,16 @@ def test_the_design_curve_follows_the_pilots_well_determined_intervals():
     m = [4.0, 4.0, 16.0, 16.0, 32.0, 32.0]
     widths = [30.0, 80.0, *(10.0 / np.sqrt(m[2:]))]
     rows = _pilot_rows(m, widths, [False, True, False, False, False, False])
-    design = _answer(rows, None, target=3.0, change=10.0, power=0.8)
+    vague = _pilot_rows([4.0, 16.0], [90.0, 50.0], [True, True]).assign(delay_ms=225.0)
+    with pytest.warns(AnklelabWarning, match=r"design: dorsi/225: no pilot interval the fit can "
+                                             r"use .*: left out of the design"):  # fmt: skip
+        design = _answer(pd.concat([rows, vague]), None, target=3.0, change=10.0, power=0.8)
     (condition,) = design.conditions
     assert condition["c_percent"] == pytest.approx(10.0) and condition["intervals"] == 5
     n = design.for_interval  # a condition's 9-in-10 share of n trials: 100 / 3² = 11.1 or more
     assert binom.ppf(0.1, n, 0.5) >= 12 > binom.ppf(0.1, n - 1, 0.5)
     pilot = design.curve["pilot"]
-    assert pilot["left_out"] == [1, 0, 0] and pilot["half_width_percent"][0] == 30.0
+    assert pilot["left_out"] == [2, 1, 0] and pilot["half_width_percent"][0] == 30.0
     # the fit against the same intervals: exact where they are c / sqrt(m)
     assert pilot["fitted_half_width_percent"] == pytest.approx([5.0, 2.5, 10.0 / np.sqrt(32)])
     assert pilot["half_width_percent"][1:] == pytest.approx(pilot["fitted_half_width_percent"][1:])

@@ -263,6 +263,15 @@ def _answer(rows: Any, run: StudyRun, target: float, change: float, power: float
         curves.append(predicted)
     if not conditions:
         raise DesignError("design: the pilot sessions are too small; give larger --pilot counts")
+    asked = set(zip(rows["direction"], rows["delay_ms"].astype(float), strict=True))
+    if left := sorted(asked - {(c["direction"], c["delay_ms"]) for c in conditions}):
+        warnings.warn(
+            f"design: {', '.join(f'{d}/{t:g}' for d, t in left)}: no pilot interval the fit can "
+            "use (each poorly determined, or of fewer than 3 trials): left out of the design; "
+            "give larger --pilot counts",
+            AnklelabWarning,
+            stacklevel=3,
+        )
     for_interval = max(cond["trials_needed"] for cond in conditions)
     half = np.max(curves, axis=0)  # the widest condition's
     shift = change / (math.sqrt(2) * half / 1.96)
