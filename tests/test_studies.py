@@ -15,7 +15,7 @@ import pandas as pd
 import pytest
 
 from anklelab._runs import RunManifest
-from anklelab.errors import ParameterError
+from anklelab.errors import AnklelabWarning, ParameterError
 from anklelab.studies import (
     attempt,
     checkpoint_for,
@@ -186,7 +186,8 @@ def test_the_study_table_holds_truth_estimate_interval_error_and_coverage(refere
     summary = pd.read_csv(out / "summary.csv")
     assert {"bias_percent", "sd_percent", "rmse_percent", "coverage",
             "poorly_determined_fraction"} <= set(summary.columns)  # fmt: skip
-    assert (out / "figures" / "stiffness_error_vs_misalignment_anterior_m.png").is_file()
+    figure = "stiffness_error_vs_params.geometry.misalignment_anterior_m.png"  # the full key
+    assert (out / "figures" / figure).is_file()
     assert len(pd.read_csv(out / "cells.csv")) == 4
 
 
@@ -365,8 +366,9 @@ def test_design_table_shows_the_recommended_count_instead_of_a_neighbour(capsys)
         "half_width_percent": (33.0 / np.sqrt(n)).tolist(),
         "power": np.minimum(1.0, n / 50).tolist(),
         "recommended": 122,
-        "pilot": {"trials_per_point": [], "half_width_percent": [], "rms_error_percent": []},
+        "pilot": {key: [] for key in ("trials_per_point", "half_width_percent", "left_out")},
     }
+    curve["pilot"] |= {"fitted_half_width_percent": [], "rms_error_percent": []}
     _print_curve(curve, "ci95")
     rows = [line.split() for line in capsys.readouterr().out.splitlines()]
     counts = [int(row[0]) for row in rows if len(row) >= 3 and row[0].isdigit()]
@@ -404,7 +406,7 @@ def test_an_unreadable_stored_result_is_named_and_computed_again(tmp_path):
     from anklelab.studies.execute import ResultStore
 
     store = ResultStore(tmp_path)
-    store.write("good", {"rows": [1, 2]})
+    store.write("good", {"ok": True, "rows": [1, 2]})
     (tmp_path / "cut.json").write_text('{"rows": [1, 2', encoding="utf-8")  # a file cut short
     (tmp_path / "list.json").write_text("[1, 2]", encoding="utf-8")
     assert store.has("good") and not store.has("missing")
@@ -414,29 +416,54 @@ def test_an_unreadable_stored_result_is_named_and_computed_again(tmp_path):
         assert not store.has("list")
 
 
-def test_the_design_fits_the_intervals_floor_and_names_a_target_below_it():
-    """Half-widths built as sqrt(100 / m + 2²) %: the fit finds c = 10 % and the 2 % floor that
-    more trials do not shrink; ±3 % then needs a condition's 9-in-10 share of trials to reach
-    20 (100 / 20 + 4 = 9), and ±1.5 % is out of reach."""
+def _pilot_rows(m: list[float], half_width: list[float], flagged: list[bool]) -> pd.DataFrame:
+    """Stiffness rows of one condition (dorsi/100), one per pilot interval of ``m`` trials."""
+    return pd.DataFrame(
+        {"twin.trials_per_point": 2 * np.asarray(m), "seed": range(len(m)), "direction": "dorsi",
+         "delay_ms": 100.0, "n_perturbed": m, "half_width_percent": half_width,
+         "poorly_determined": flagged, "error_percent": 0.0, "interval_kind": "ci95"}
+    )  # fmt: skip
+
+
+def test_the_design_curve_follows_the_pilots_well_determined_intervals():
+    """Least squares on the squared half-widths followed the smallest pilot's widest intervals
+    and over-recommended. Here the larger pilots' intervals are exactly 10 % / sqrt(m); the
+    smallest pilot has one wide interval and one the analysis flagged as poorly determined."""
     from scipy.stats import binom
 
     from anklelab.studies.design import _answer
 
-    m = np.array([4.0, 8.0, 16.0, 32.0, 64.0])
-    rows = pd.DataFrame(
-        {"twin.trials_per_point": 2 * m, "seed": 0, "direction": "dorsi", "delay_ms": 100.0,
-         "n_perturbed": m, "half_width_percent": np.sqrt(100.0 / m + 4.0),
-         "error_percent": 0.0, "interval_kind": "ci95"}
-    )  # fmt: skip
-    design = _answer(rows, None, target=3.0, change=10.0, power=0.8)
+    m = [4.0, 4.0, 16.0, 16.0, 32.0, 32.0]
+    widths = [30.0, 80.0, *(10.0 / np.sqrt(m[2:]))]
+    rows = _pilot_rows(m, widths, [False, True, False, False, False, False])
+    vague = _pilot_rows([4.0, 16.0], [90.0, 50.0], [True, True]).assign(delay_ms=225.0)
+    with pytest.warns(AnklelabWarning, match=r"design: dorsi/225: no pilot interval the fit can "
+                                             r"use .*: left out of the design"):  # fmt: skip
+        design = _answer(pd.concat([rows, vague]), None, target=3.0, change=10.0, power=0.8)
     (condition,) = design.conditions
-    assert condition["c_percent"] == pytest.approx(10.0) and condition["floor_percent"] == (
-        pytest.approx(2.0)
-    )
-    n = design.for_interval
-    assert binom.ppf(0.1, n, 0.5) >= 20 > binom.ppf(0.1, n - 1, 0.5)
-    with pytest.raises(ParameterError, match=r"±1\.5 % is out of reach at dorsi/100: .*±2\.00 %"):
-        _answer(rows, None, target=1.5, change=10.0, power=0.8)
+    assert condition["c_percent"] == pytest.approx(10.0) and condition["intervals"] == 5
+    n = design.for_interval  # a condition's 9-in-10 share of n trials: 100 / 3² = 11.1 or more
+    assert binom.ppf(0.1, n, 0.5) >= 12 > binom.ppf(0.1, n - 1, 0.5)
+    pilot = design.curve["pilot"]
+    assert pilot["left_out"] == [2, 1, 0] and pilot["half_width_percent"][0] == 30.0
+    # the fit against the same intervals: exact where they are c / sqrt(m)
+    assert pilot["fitted_half_width_percent"] == pytest.approx([5.0, 2.5, 10.0 / np.sqrt(32)])
+    assert pilot["half_width_percent"][1:] == pytest.approx(pilot["fitted_half_width_percent"][1:])
+
+
+def test_the_design_names_an_extrapolation_and_stops_at_the_twins_1000_trials():
+    from anklelab.studies.design import DesignError, _answer
+
+    m = [16.0, 16.0, 32.0, 32.0]  # pilots of 32 and 64 trials per point
+    rows = _pilot_rows(m, list(10.0 / np.sqrt(m)), [False] * 4)
+    with pytest.warns(AnklelabWarning, match=r"design: the recommended \d+ trials per timing "
+                                             r"point are more than 2 times the largest pilot "
+                                             r"\(64\): the curve is extrapolated"):  # fmt: skip
+        design = _answer(rows, None, target=0.5, change=10.0, power=0.8)
+    assert design.recommended > 500 and design.curve["trials_per_point"][-1] == 1000
+    with pytest.raises(DesignError, match=r"±0\.3 % is out of reach at dorsi/100: .*more than "
+                                          r"the twin's 1000 trials per timing point"):  # fmt: skip
+        _answer(rows, None, target=0.3, change=10.0, power=0.8)
 
 
 def test_a_grid_point_whose_every_session_failed_stays_in_the_summary():
@@ -568,3 +595,123 @@ def test_a_randomised_study_window_is_checked_against_the_shortest_stance_drawn(
         study_from_mapping(mapping, origin="w.toml")
     mapping["params"] = {"gait.stance_s": 0.8}  # a stance the study sets is not drawn
     study_from_mapping(mapping, origin="w.toml")
+
+
+@pytest.mark.parametrize("twin", [{"unperturbed_per_point": 2.0}, {"n_unperturbed": 3}])
+def test_a_randomised_draw_records_the_unperturbed_trials_simulated(twin):
+    """``draw.n_unperturbed`` gave the draw's own count, not the one the study set."""
+    from anklelab.studies.cell import simulate_cell
+    from anklelab.studies.spec import Cell
+
+    settings = twin | {"randomised": "prosthetic", "trials_per_point": 2, "n_calibration": 1,
+                       "bench": False}  # fmt: skip
+    session = simulate_cell(Cell(0, 1, settings, {}, {}, {}))
+    simulated = sum(not trial.perturbed for trial in session.walking)
+    assert simulated == twin.get("n_unperturbed", 4)
+    assert session.truth["draw"]["n_unperturbed"] == simulated
+
+
+def _summary_of(points: dict[str, list], n: int = 2) -> pd.DataFrame:
+    """A summary table over ``points`` (full key: values, one row each) at two timing points."""
+    rows = []
+    for i in range(len(next(iter(points.values())))):
+        for delay in (100.0, 225.0):
+            rows.append(
+                {key: values[i] for key, values in points.items()}
+                | {"direction": "dorsi", "delay_ms": delay, "quantity": "stiffness_nm_per_rad",
+                   "n_sessions": n, "n_failed": 0, "bias_percent": 0.1 * i, "sd_percent": 0.5,
+                   "rmse_percent": 0.6, "abs_error_percent_max": 1.0, "coverage": 1.0,
+                   "interval_kind": "ci95"}
+            )  # fmt: skip
+    return pd.DataFrame(rows)
+
+
+def test_two_varied_keys_of_the_same_last_name_keep_their_own_figure_and_column(tmp_path, capsys):
+    """``analysis.window_ms`` and ``params.walking.window_ms`` wrote the same figure (the second
+    replaced the first) and showed the same column header."""
+    from anklelab.commands.study import _print_summary
+    from anklelab.studies.figures import study_figures
+
+    keys = ["analysis.window_ms", "params.walking.window_ms"]
+    summary = _summary_of({keys[0]: [75.0, 100.0], keys[1]: [100.0, 125.0]})
+    written = study_figures(summary, keys, tmp_path, title="clash")
+    assert [path.name for path in written] == [f"stiffness_error_vs_{key}.png" for key in keys]
+    assert all(path.is_file() for path in written)
+    _print_summary(summary, keys, pd.DataFrame())
+    header = next(line for line in capsys.readouterr().out.splitlines() if "point" in line)
+    assert all(key in header for key in keys), header
+
+
+def test_a_list_valued_setting_is_drawn_with_its_values_as_labels(tmp_path):
+    """A grid over ``params.walking.timing_points_ms`` ran every cell, then the figure step
+    failed on the lists (unhashable) and the study ended in a traceback."""
+    from anklelab.studies.figures import study_figures
+
+    key = "params.walking.timing_points_ms"
+    summary = _summary_of({key: [[100.0, 225.0], [100.0, 350.0]], "twin.noise_scale": [1.0, 2.0]})
+    written = study_figures(summary, [key, "twin.noise_scale"], tmp_path, title="lists")
+    assert written[0].name == f"stiffness_error_vs_{key}.png"
+    assert all(path.is_file() for path in written)
+
+
+def test_batch_sends_its_workers_absolute_paths(tmp_path, monkeypatch):
+    """A cluster's workers have their own working directory: relative paths failed every
+    session there."""
+    import anklelab.studies.batch as batch
+    from anklelab.pipelines.walking import WalkingSettings
+
+    sent = []
+
+    def run_tasks(tasks, store, **options):
+        for task in tasks:
+            sent.append(task.args[0])
+            store.write(task.key, {"ok": False, "attempts": 1, "error": "E: not run"})
+        return {"resumed": 0, "ran": len(tasks), "wall_s": 0.0}
+
+    monkeypatch.setattr(batch, "run_tasks", run_tasks)
+    (tmp_path / "S1").mkdir()
+    (tmp_path / "S1" / "day1.h5").write_bytes(b"")
+    monkeypatch.chdir(tmp_path)
+    run = batch.run_batch([Path("S1/./day1.h5")], tmp_path / "out", settings=WalkingSettings())
+    assert sent == [os.path.join(tmp_path, "S1", "day1.h5")]
+    assert run.failed == {"day1": "E: not run"}
+
+
+def test_a_second_run_computes_only_the_sessions_that_failed(tmp_path):
+    """A completed study with failed sessions could only be run again whole (--force); the same
+    command now computes only the failed ones and replaces the output."""
+    study_file = tmp_path / "fails.toml"
+    text = TINY_TOML.replace("seeds = [0, 1]", "seeds = [0]").replace(
+        '"params.geometry.misalignment_anterior_m" = [0.0, 0.016]',
+        '"twin.noise_scale" = [1.0, 100000.0]',  # the second drowns the plate in noise
+    )
+    study_file.write_text(text, encoding="utf-8")
+    target = tmp_path / "out"
+    command = [sys.executable, "-c", "from anklelab.cli import run; run()", "study",
+               str(study_file), "--out", str(target), "--workers", "1", "--retries", "0",
+               "--no-figures"]  # fmt: skip
+    first = subprocess.run(command, capture_output=True, text=True, timeout=300)
+    assert first.returncode == 1, first.stderr
+    failed = pd.read_csv(target / "cells.csv").query("status == 'failed'")["cell"].tolist()
+    assert len(failed) == 1
+    second = subprocess.run(command, capture_output=True, text=True, timeout=300)
+    assert second.returncode == 1, second.stderr  # the noise is as loud the second time
+    assert f"{target}: computing its 1 failed session again (1 kept)" in second.stdout
+    assert "(1 already done, 1 run)" in second.stdout
+    assert pd.read_csv(target / "cells.csv")["attempts"].tolist() == [1, 1]
+    assert not checkpoint_for(target).exists()
+
+
+def test_a_session_given_twice_is_named_as_typed(tmp_path, monkeypatch):
+    """``batch S/./x.h5 S/x.h5`` said "S/x.h5 is S/x.h5 given again": the paths were
+    normalised before they were named."""
+    from typer.testing import CliRunner
+
+    from anklelab.cli import app
+
+    (tmp_path / "S").mkdir()
+    (tmp_path / "S" / "x.h5").write_bytes(b"")
+    monkeypatch.chdir(tmp_path)
+    result = CliRunner().invoke(app, ["batch", "S/./x.h5", "S/x.h5", "--out", "out"])
+    assert str(result.exception) == "SESSIONS: S/x.h5 is S/./x.h5 given again"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["S"]

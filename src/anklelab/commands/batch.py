@@ -14,14 +14,15 @@ from anklelab.commands.study import (
     SchedulerOption,
     WorkersOption,
     resumable_output,
+    warning_lines,
 )
 
 __all__ = ["batch"]
 
 
 def batch(
-    sessions: Annotated[
-        list[Path],
+    sessions: Annotated[  # as typed: Path would drop the './' a message must show
+        list[str],
         typer.Argument(metavar="SESSIONS...", help="Session directories, .h5 or .mat files."),
     ],
     out: Annotated[Path, typer.Option("--out", "-o", help="Output directory.")],
@@ -44,12 +45,17 @@ def batch(
     from anklelab.commands._progress_bars import recording_progress
     from anklelab.pipelines.walking import load_walking_settings
     from anklelab.studies import run_batch
+    from anklelab.studies.batch import session_names
+    from anklelab.studies.execute import check_scheduler
 
     for path in sessions:
-        session_input(path)
+        session_input(Path(path))
+    session_names(sessions)  # a session given twice is refused before any output
+    check_scheduler(scheduler, workers)
     settings = load_walking_settings(settings_file)
-    inputs = [*sessions, *([settings_file] if settings_file else [])]
+    inputs = [*map(Path, sessions), *([settings_file] if settings_file else [])]
     with (
+        warning_lines(),
         resumable_output(out, command="batch", force=force, inputs=inputs) as (run, store),
         recording_progress() as task,
     ):

@@ -9,7 +9,12 @@ from typing import Annotated
 import typer
 
 from anklelab.commands._options import ForceOption, SettingsOption, finite
-from anklelab.commands.study import SchedulerOption, WorkersOption, resumable_output
+from anklelab.commands.study import (
+    SchedulerOption,
+    WorkersOption,
+    resumable_output,
+    warning_lines,
+)
 
 __all__ = ["design"]
 
@@ -79,20 +84,27 @@ def design(
     from anklelab.pipelines.walking import load_walking_settings
     from anklelab.platforms import load_platform
     from anklelab.studies import design_trials
-    from anklelab.studies.design import check_targets
+    from anklelab.studies.design import DesignError, check_targets, pilot_study
+    from anklelab.studies.execute import check_scheduler
 
     try:
         counts = [int(n) for n in pilot.split(",")]
     except ValueError:
         raise ParameterError(f"--pilot: expected counts like 10,20,40, got {pilot!r}") from None
-    check_targets(interval, change, power, counts, seeds)
+    counts = check_targets(interval, change, power, counts, seeds)
+    check_scheduler(scheduler, workers)
     parameters = load_platform("perturberator", params)
     analysis = {}
     if settings_file is not None:  # checked now, not in every pilot session
         analysis = load_walking_settings(settings_file).model_dump(mode="json")
+    # the whole pilot study is checked before the output is staged
+    pilot_study(counts, foot=foot.value, params_file=params, seeds=seeds, analysis=analysis)
     inputs = [p for p in (params, settings_file) if p is not None]
     with (
-        resumable_output(out, command="design", force=force, inputs=inputs) as (run, store),
+        warning_lines(),
+        resumable_output(
+            out, command="design", force=force, inputs=inputs, discard_on=(DesignError,)
+        ) as (run, store),
         recording_progress() as task,
     ):
         if scheduler is None:
@@ -138,7 +150,11 @@ def _print_curve(curve: dict, kind: str) -> None:
                       f"{100 * curve['power'][i]:.0f}", mark)  # fmt: skip
     Console().print(table)
     pilot = curve["pilot"]
-    for n_pilot, width, rms in zip(pilot["trials_per_point"], pilot["half_width_percent"],
-                                   pilot["rms_error_percent"], strict=True):  # fmt: skip
-        typer.echo(f"pilot {n_pilot:4d} trials per point: reported half-width {width:.2f} %, "
-                   f"RMS error against the truth {rms:.2f} %")  # fmt: skip
+    for n_pilot, width, fitted, left_out, rms in zip(
+        pilot["trials_per_point"], pilot["half_width_percent"],
+        pilot["fitted_half_width_percent"], pilot["left_out"], pilot["rms_error_percent"],
+        strict=True,
+    ):  # fmt: skip
+        vague = f"; {left_out} poorly determined left out" if left_out else ""
+        typer.echo(f"pilot {n_pilot:4d} trials per point: half-width {width:.2f} % (fit "
+                   f"{fitted:.2f} %{vague}), RMS error against the truth {rms:.2f} %")  # fmt: skip

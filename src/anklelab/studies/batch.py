@@ -17,7 +17,7 @@ directory holds, per session, ``sessions/NAME/results.json`` and ``results.csv``
 - ``figures/``: stiffness against timing point per subject, and pooled.
 
 Nothing here imports the twin or numba. On a cluster, the workers must see the session files
-at the same paths as this machine (a shared file system).
+at the same paths as this machine (a shared file system): each is sent by its absolute path.
 """
 
 from __future__ import annotations
@@ -92,7 +92,7 @@ def analyse_session_file(path: str, settings: WalkingSettings) -> dict[str, Any]
     }
 
 
-def session_names(paths: Sequence[Path]) -> list[str]:
+def session_names(paths: Sequence[str | os.PathLike[str]]) -> list[str]:
     """Output names: each session's file or directory stem, with as many parent directories as
     it takes to tell apart sessions of the same name (``S01-session1``, ``S02-session1``).
 
@@ -101,7 +101,7 @@ def session_names(paths: Sequence[Path]) -> list[str]:
     >>> session_names([Path("S01/day1.h5"), Path("S02/day1.h5"), Path("S03/x")])
     ['S01-day1', 'S02-day1', 'x']
 
-    A session given twice, however its path is spelled, is refused.
+    A session given twice, however its path is spelled, is refused, naming both as given.
     """
     real = [os.path.realpath(p) for p in paths]
     for i, target in enumerate(real):
@@ -124,7 +124,7 @@ def session_names(paths: Sequence[Path]) -> list[str]:
 
 
 def run_batch(
-    paths: Sequence[Path],
+    paths: Sequence[str | os.PathLike[str]],
     out: Path,
     *,
     settings: WalkingSettings,
@@ -143,20 +143,23 @@ def run_batch(
     ``workers``, ``retries`` and ``progress`` are those of
     :func:`anklelab.studies.execute.run_tasks`.
     """
-    paths = [Path(p) for p in paths]
     if not paths:
         raise ParameterError("SESSIONS: give at least one session")
-    for path in paths:
+    names = session_names(paths)  # the paths as given, for its messages
+    files = [Path(p) for p in paths]
+    for path in files:
         if not path.exists():
             raise ParameterError(f"{path}: session not found")
-    names = session_names(paths)
     config = settings.model_dump(mode="json")
-    keys = [_key(path, config) for path in paths]
-    results = ResultStore(out / "cells" if store is None else store)
+    keys = [_key(path, config) for path in files]
+    results = ResultStore(
+        out / "cells" if store is None else store, fields=("subject", "document", "table")
+    )
+    # absolute paths: a cluster's workers have working directories of their own
     tasks = list(
         {
-            k: Task(k, analyse_session_file, (str(p), settings))
-            for k, p in zip(keys, paths, strict=True)
+            k: Task(k, analyse_session_file, (os.path.abspath(p), settings))
+            for k, p in zip(keys, files, strict=True)
         }.values()
     )
     run = run_tasks(
@@ -165,7 +168,7 @@ def run_batch(
     results.copy_into(list(dict.fromkeys(keys)), out / "cells")
     rows: list[dict[str, Any]] = []
     failed, hashes = {}, {}
-    for path, name, key in zip(paths, names, keys, strict=True):
+    for path, name, key in zip(files, names, keys, strict=True):
         record = results.read(key)
         if not record["ok"]:
             failed[name] = record["error"]
@@ -192,7 +195,7 @@ def run_batch(
         from anklelab.studies.figures import group_figures
 
         group_figures(group[group["status"] == "ok"], pooled, out / "figures")
-    named = dict(zip((str(p) for p in paths), names, strict=True))
+    named = dict(zip((str(p) for p in files), names, strict=True))
     return BatchRun(group, pooled, named, failed, int(run["resumed"]), int(run["ran"]), hashes)
 
 

@@ -6,6 +6,7 @@ and analysed where the function runs, and only the rows (plain numbers and text)
 
 from __future__ import annotations
 
+import dataclasses
 import time
 import warnings
 from typing import Any
@@ -70,9 +71,10 @@ def simulate_cell(cell: Cell, *, threads: int | None = 1) -> Session:
             params=base,
         )
         unperturbed = _unperturbed(twin, draw.trials_per_point) or draw.n_unperturbed
+        draw = dataclasses.replace(draw, n_unperturbed=unperturbed)  # as simulated
         session = simulate_perturberator(
             draw.params.replace(_truth_window(cell)), seed=rng, foot=draw.foot,
-            trials_per_point=draw.trials_per_point, n_unperturbed=unperturbed, **options,
+            trials_per_point=draw.trials_per_point, n_unperturbed=draw.n_unperturbed, **options,
         )  # fmt: skip
         truth = dict(session.truth or {}) | {"draw": draw.describe()}
         return Session(

@@ -4,16 +4,17 @@ A study preset. Pilot sessions of the foot the user describes are simulated at a
 counts (several seeds each, the unperturbed trials scaled along, as in paper 000's 400 for 100
 per point) and analysed as lab data. For every condition (direction and timing point) the
 stiffness interval the analysis reports (its ``ci95``, else ``mean ± 1.96 sd``: see
-:mod:`anklelab.studies.rows`) is fitted by ``half-width² = c² / m + floor²``, ``m`` the
-condition's perturbed trials: the interval is the random part (random averages shrink as
-``1 / sqrt(m)``) and a systematic part (timing, the coupler's twist, the window) in quadrature,
-which more trials do not shrink (least squares on the squares, both parts non-negative). Each
-trial of a timing point is dorsiflexing or plantarflexing at random, so a condition gets a
+:mod:`anklelab.studies.rows`) is fitted by ``half-width = c / sqrt(m)``, ``m`` the condition's
+perturbed trials (random averages shrink as ``1 / sqrt(m)``). Each pilot interval gives one
+``c = half-width · sqrt(m)``; the condition's ``c`` is their median weighted by ``m``, so that
+the pilot's larger sessions, whose intervals are the better determined and the nearest to the
+answer, count the most, and one wide interval of a few trials does not set the curve. Intervals
+the analysis flags as poorly determined, and those of fewer than 3 trials, are left out.
+Each trial of a timing point is dorsiflexing or plantarflexing at random, so a condition gets a
 binomial share of the ``n`` trials per timing point; the design holds for the share a condition
 gets in 9 sessions of 10 (the binomial's 10th percentile ``m10(n)``, about
-``n/2 - 0.64 sqrt(n)``): ``half-width(n) = sqrt(c² / m10(n) + floor²)``. A target below a
-condition's floor is out of reach, and said so.
-Then:
+``n/2 - 0.64 sqrt(n)``): ``half-width(n) = c / sqrt(m10(n))``, up to the twin's 1000 trials per
+timing point. Then:
 
 - **interval**: the smallest ``n`` whose predicted half-width is within ``±X %`` of the
   stiffness in *every* condition;
@@ -22,13 +23,19 @@ Then:
   ``power(n) = Φ(Y / (√2 se(n)) − 1.96) + Φ(−Y / (√2 se(n)) − 1.96)``; the smallest ``n``
   reaching the target power.
 
-The recommendation is the larger of the two. The pilot's actual errors against the twin's truth
-are reported next to the intervals: an interval is only worth its width if it covers the truth.
+The recommendation is the larger of the two; a target that needs more than 1000 trials per
+timing point is out of reach. Parts of an interval that more trials do not shrink (timing, the
+coupler's twist, the window) make ``c / sqrt(m)`` optimistic far beyond the pilot, and a
+small pilot's scatter moves it either way: a recommendation more than twice the largest pilot
+count is said to be extrapolated, in a warning. The pilot's actual errors against the twin's
+truth are reported next to the intervals: an interval is only worth its width if it covers the
+truth.
 """
 
 from __future__ import annotations
 
 import math
+import warnings
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -36,11 +43,17 @@ from typing import Any
 
 import numpy as np
 
-from anklelab.errors import ParameterError
-from anklelab.studies.spec import study_from_mapping
+from anklelab._session_limits import MAX_TRIALS_PER_POINT
+from anklelab.errors import AnklelabWarning, ParameterError
+from anklelab.studies.spec import Study, study_from_mapping
 from anklelab.studies.study import StudyRun, run_study
 
-__all__ = ["Design", "check_targets", "design_trials"]
+__all__ = ["Design", "DesignError", "check_targets", "design_trials", "pilot_study"]
+
+
+class DesignError(ParameterError):
+    """The pilot sessions ran but cannot answer the question asked (a target out of reach, no
+    usable interval): running them again would not either."""
 
 
 @dataclass(frozen=True)
@@ -54,12 +67,15 @@ class Design:
     for_interval, for_power : int
         Enough for the interval target in every condition; enough for the power target.
     curve : dict
-        ``trials_per_point``, ``half_width_percent`` (widest condition), ``power``; the targets;
-        ``pilot``: per pilot count, the mean reported half-width of the widest condition and the
-        RMS error against the truth, in %.
+        ``trials_per_point`` (2 to at most 1000), ``half_width_percent`` (widest condition, %),
+        ``power``; the targets; ``pilot``: per pilot count, the widest interval the fit used
+        and the widest the fit gives the same intervals (each the mean over sessions, %), the
+        intervals ``left_out`` (poorly determined or of fewer than 3 trials), the RMS error
+        against the truth (%) and the sessions.
     conditions : list of dict
-        Per condition: ``direction``, ``delay_ms``, the fitted ``c_percent`` and the ``n`` it
-        needs.
+        Per condition: ``direction``, ``delay_ms``, the fitted ``c_percent`` (%, the half-width
+        of one trial's interval), the ``intervals`` it was fitted to and the ``trials_needed``
+        per timing point.
     interval_kind : str
         Which interval the analysis reported (``ci95`` or ``mean±1.96sd``).
     study : StudyRun
@@ -133,17 +149,10 @@ def design_trials(
         As for :func:`anklelab.studies.run_study`.
     """
     counts = check_targets(interval_percent, change_percent, power, pilot, seeds)
-    document: dict[str, Any] = {
-        "name": "design",
-        "seeds": seeds,
-        "twin": {"foot": foot, "bench": False, "unperturbed_per_point": _ratio(params_file)}
-        | ({"n_calibration": n_calibration} if n_calibration else {}),
-        "analysis": dict(analysis or {}),
-        "grid": {"twin.trials_per_point": counts},
-    }
-    if params_file is not None:
-        document["params_file"] = str(Path(params_file).resolve())
-    study = study_from_mapping(document, origin="design")
+    study = pilot_study(
+        counts, foot=foot, params_file=params_file, seeds=seeds, analysis=analysis,
+        n_calibration=n_calibration,
+    )  # fmt: skip
     run = run_study(
         study, out, store=store, scheduler=scheduler, workers=workers, figures=False,
         progress=progress,
@@ -153,7 +162,7 @@ def design_trials(
     ]
     if rows.empty:
         failures = "; ".join(sorted(set(run.failed["error"]))) or "no stiffness estimates"
-        raise ParameterError(f"design: every pilot session failed ({failures})")
+        raise DesignError(f"design: every pilot session failed ({failures})")
     design = _answer(rows, run, interval_percent, change_percent, power)
     if figures:
         from anklelab.studies.figures import design_figure
@@ -178,11 +187,41 @@ def check_targets(
     if not 0 < power < 1:
         raise ParameterError(f"--power: expected 0 < power < 1, got {power:g}")
     counts = sorted({int(n) for n in pilot})
-    if len(counts) < 2 or counts[0] < 2:
-        raise ParameterError(f"--pilot: expected two or more counts >= 2, got {list(pilot)}")
+    if len(counts) < 2 or counts[0] < 2 or counts[-1] > MAX_TRIALS_PER_POINT:
+        raise ParameterError(
+            f"--pilot: expected two or more counts from 2 to {MAX_TRIALS_PER_POINT} trials per "
+            f"timing point, got {list(pilot)}"
+        )
     if seeds < 1:
         raise ParameterError(f"--seeds: expected >= 1, got {seeds}")
     return counts
+
+
+def pilot_study(
+    counts: Sequence[int],
+    *,
+    foot: str = "prosthetic",
+    params_file: Path | None = None,
+    seeds: int = 2,
+    analysis: dict[str, Any] | None = None,
+    n_calibration: int | None = None,
+) -> Study:
+    """The pilot study of :func:`design_trials` (its parameters), checked as a study file is:
+    a command builds it before it stages its output, so that nothing is written if it fails.
+
+    ``counts`` are the pilot's trials per timing point (see :func:`check_targets`).
+    """
+    document: dict[str, Any] = {
+        "name": "design",
+        "seeds": seeds,
+        "twin": {"foot": foot, "bench": False, "unperturbed_per_point": _ratio(params_file)}
+        | ({"n_calibration": n_calibration} if n_calibration else {}),
+        "analysis": dict(analysis or {}),
+        "grid": {"twin.trials_per_point": list(counts)},
+    }
+    if params_file is not None:
+        document["params_file"] = str(Path(params_file).resolve())
+    return study_from_mapping(document, origin="design")
 
 
 def _ratio(params_file: Path | None) -> float:
@@ -194,52 +233,70 @@ def _ratio(params_file: Path | None) -> float:
 
 
 def _answer(rows: Any, run: StudyRun, target: float, change: float, power: float) -> Design:
-    from scipy.optimize import nnls
     from scipy.stats import binom, norm
 
-    n = rows["twin.trials_per_point"].to_numpy(float)
-    # fit per condition against its own trial count (each trial of a timing point is dorsi or
+    # per condition, against its own trial count (each trial of a timing point is dorsi or
     # plantar at random: a condition gets about half); a bootstrap of fewer than 3 trials has
-    # no spread to measure
-    usable = rows[(rows["n_perturbed"] >= 3) & (rows["half_width_percent"] > 0)]
-    grid = np.arange(2, 20001)
+    # no spread to measure, and a poorly determined interval no width to trust
+    usable = rows[
+        (rows["n_perturbed"] >= 3)
+        & (rows["half_width_percent"] > 0)
+        & ~rows["poorly_determined"].astype(bool)
+    ]
+    grid = np.arange(2, MAX_TRIALS_PER_POINT + 1)
     share = np.maximum(binom.ppf(0.1, grid, 0.5), 1.0)  # a condition's trials, 9 sessions in 10
     conditions, curves = [], []
     for (direction, delay), group in usable.groupby(["direction", "delay_ms"], sort=True):
-        h = group["half_width_percent"].to_numpy(float)
-        x = 1.0 / group["n_perturbed"].to_numpy(float)
-        # the interval is hypot(random, systematic): h² = c² / m + floor², non-negative parts
-        (c2, floor2), _ = nnls(np.column_stack([x, np.ones_like(x)]), h**2)
-        predicted = np.sqrt(c2 / share + floor2)
+        m = group["n_perturbed"].to_numpy(float)
+        c = _weighted_median(group["half_width_percent"].to_numpy(float) * np.sqrt(m), m)
+        predicted = c / np.sqrt(share)
         if not predicted[-1] <= target:
-            raise ParameterError(
-                f"design: ±{target:g} % is out of reach at {direction}/{delay:g}: the part of "
-                "its interval that more trials do not shrink (timing, the coupler's twist, the "
-                f"window) is ±{math.sqrt(floor2):.2f} %; ask for a wider --interval"
+            raise DesignError(
+                f"design: ±{target:g} % is out of reach at {direction}/{delay:g}: its interval, "
+                f"±{c:.1f} % / sqrt(trials of the condition), needs more than the twin's "
+                f"{MAX_TRIALS_PER_POINT} trials per timing point; ask for a wider --interval"
             )
         conditions.append(
-            {"direction": direction, "delay_ms": float(delay), "c_percent": math.sqrt(c2),
-             "floor_percent": math.sqrt(floor2),
-             "trials_needed": int(grid[np.argmax(predicted <= target)])}
+            {"direction": direction, "delay_ms": float(delay), "c_percent": c,
+             "intervals": len(group), "trials_needed": int(grid[np.argmax(predicted <= target)])}
         )  # fmt: skip
         curves.append(predicted)
     if not conditions:
-        raise ParameterError("design: the pilot sessions are too small; give larger --pilot counts")
+        raise DesignError("design: the pilot sessions are too small; give larger --pilot counts")
+    asked = set(zip(rows["direction"], rows["delay_ms"].astype(float), strict=True))
+    if left := sorted(asked - {(c["direction"], c["delay_ms"]) for c in conditions}):
+        warnings.warn(
+            f"design: {', '.join(f'{d}/{t:g}' for d, t in left)}: no pilot interval the fit can "
+            "use (each poorly determined, or of fewer than 3 trials): left out of the design; "
+            "give larger --pilot counts",
+            AnklelabWarning,
+            stacklevel=3,
+        )
     for_interval = max(cond["trials_needed"] for cond in conditions)
     half = np.max(curves, axis=0)  # the widest condition's
     shift = change / (math.sqrt(2) * half / 1.96)
     power_curve = norm.cdf(shift - 1.96) + norm.cdf(-shift - 1.96)
     if not power_curve[-1] >= power:
-        raise ParameterError(
-            f"design: a power of {power:g} to detect a {change:g} % change is out of reach: the "
-            f"widest interval does not shrink below ±{half[-1]:.2f} % (its floor); ask for a "
-            "larger --change or a smaller --power"
+        raise DesignError(
+            f"design: a power of {power:g} to detect a {change:g} % change is out of reach: it "
+            f"needs more than the twin's {MAX_TRIALS_PER_POINT} trials per timing point (the "
+            f"widest interval is ±{half[-1]:.2f} % there); ask for a larger --change or a "
+            "smaller --power"
         )
     for_power = int(grid[np.argmax(power_curve >= power)])
     recommended = max(for_interval, for_power)
-    shown = grid <= max(2 * recommended, int(n.max()) + 1)
-    pilot = rows.groupby("twin.trials_per_point")
-    widest_seen = rows.groupby(["twin.trials_per_point", "seed"])["half_width_percent"].max()
+    largest = int(rows["twin.trials_per_point"].max())
+    if recommended > _EXTRAPOLATED * largest:
+        warnings.warn(
+            f"design: the recommended {recommended} trials per timing point are more than "
+            f"{_EXTRAPOLATED:g} times the largest pilot ({largest}): the curve is extrapolated "
+            "there, by c / sqrt(m), and may be off either way (what more trials do not shrink "
+            "makes it optimistic; the pilot's scatter, either); check it with a pilot nearer to "
+            f"it (--pilot {largest},{recommended})",
+            AnklelabWarning,
+            stacklevel=3,
+        )
+    shown = grid <= max(2 * recommended, largest + 1)
     curve = {
         "trials_per_point": grid[shown].tolist(),
         "half_width_percent": half[shown].tolist(),
@@ -248,14 +305,50 @@ def _answer(rows: Any, run: StudyRun, target: float, change: float, power: float
         "change_percent": change,
         "target_power": power,
         "recommended": recommended,
-        "pilot": {
-            "trials_per_point": [int(k) for k in pilot.groups],
-            "half_width_percent": widest_seen.groupby(level=0).mean().tolist(),
-            "rms_error_percent": pilot["error_percent"]
-            .apply(lambda e: float(np.sqrt(np.nanmean(e.to_numpy(float) ** 2))))
-            .tolist(),
-            "sessions": pilot["seed"].nunique().tolist(),
-        },
+        "pilot": _pilot(rows, usable, {(c["direction"], c["delay_ms"]): c for c in conditions}),
     }
     kind = "/".join(sorted(set(rows["interval_kind"])))
     return Design(recommended, for_interval, for_power, curve, conditions, kind, run)
+
+
+_EXTRAPOLATED = 2.0
+"""A recommendation beyond this many times the largest pilot count is named as extrapolated."""
+
+
+def _pilot(rows: Any, usable: Any, fitted: dict[tuple[str, float], dict]) -> dict[str, list]:
+    """Per pilot count: the widest interval the fit used, and the widest the fit gives the same
+    intervals (``c / sqrt(m)``, each with its own trials), each the mean over sessions, in %;
+    how many intervals were left out; the RMS error against the truth (%); the sessions."""
+    counts = sorted(int(n) for n in rows["twin.trials_per_point"].unique())
+    keys = zip(usable["direction"], usable["delay_ms"].astype(float), strict=True)
+    usable = usable.assign(
+        fitted=np.array([fitted[key]["c_percent"] for key in keys])
+        / np.sqrt(usable["n_perturbed"].to_numpy(float))
+    )
+    widest = usable.groupby(["twin.trials_per_point", "seed"])[["half_width_percent", "fitted"]]
+    mean = widest.max().groupby(level=0).mean().reindex(counts)
+    pilot = rows.groupby("twin.trials_per_point")
+    used = usable.groupby("twin.trials_per_point").size().reindex(counts, fill_value=0)
+    return {
+        "trials_per_point": counts,
+        "half_width_percent": mean["half_width_percent"].tolist(),
+        "fitted_half_width_percent": mean["fitted"].tolist(),
+        "left_out": (pilot.size() - used).tolist(),
+        "rms_error_percent": pilot["error_percent"]
+        .apply(lambda e: float(np.sqrt(np.nanmean(e.to_numpy(float) ** 2))))
+        .tolist(),
+        "sessions": pilot["seed"].nunique().tolist(),
+    }
+
+
+def _weighted_median(values: np.ndarray, weights: np.ndarray) -> float:
+    """The value with at most half the weight below it and half above (the lower of two).
+
+    >>> _weighted_median(np.array([10.0, 1.0, 2.0]), np.array([1.0, 1.0, 1.0]))
+    2.0
+    >>> _weighted_median(np.array([30.0, 10.0]), np.array([4.0, 20.0]))
+    10.0
+    """
+    order = np.argsort(values)
+    cumulative = np.cumsum(weights[order])
+    return float(values[order][np.searchsorted(cumulative, cumulative[-1] / 2)])

@@ -39,6 +39,7 @@ def study_figures(
     plt = _pyplot()
     directory.mkdir(parents=True, exist_ok=True)
     rows = summary[summary["quantity"] == "stiffness_nm_per_rad"]
+    rows = rows.assign(**{key: rows[key].map(_tick) for key in varied})
     written = []
     keys: list[str | None] = [*varied] if varied else [None]
     for key in keys:
@@ -46,17 +47,19 @@ def study_figures(
         others = [k for k in varied if k != key]
         fig, (ax_bias, ax_rmse) = plt.subplots(1, 2, figsize=(10, 4), constrained_layout=True)
         lines = [("all", rows)] if key is None else list(rows.groupby(["direction", "delay_ms"]))
+        # one place per value for every line (a line may lack some: a grid of timing points)
+        where, ticks = _positions(sorted(rows[x_key].unique()))
         for label, group in lines:
             table = group.groupby(x_key, sort=True)[["bias_percent", "sd_percent", "rmse_percent"]]
             mean = table.mean()
-            xs, ticks = _positions(list(mean.index))
+            xs = [where[value] for value in mean.index]
             name = "" if key is None else f"{label[0]} {label[1]:g} ms"
             ax_bias.errorbar(xs, mean["bias_percent"], yerr=mean["sd_percent"], marker="o",
                              capsize=3, label=name)  # fmt: skip
             ax_rmse.plot(xs, mean["rmse_percent"], marker="o", label=name)
+        if ticks is not None:
             for ax in (ax_bias, ax_rmse):
-                if ticks is not None:
-                    ax.set_xticks(xs, ticks)
+                ax.set_xticks(list(where.values()), ticks)
         xlabel = "timing point, ms after heel contact" if key is None else _label(key)
         ax_bias.axhline(0.0, color="0.6", lw=0.8)
         ax_bias.set(xlabel=xlabel, ylabel="stiffness error, % of truth (mean ± sd over seeds)")
@@ -81,7 +84,10 @@ def design_figure(curve: dict[str, Any], path: Path) -> Path:
     fig, (ax_w, ax_p) = plt.subplots(1, 2, figsize=(10, 4), constrained_layout=True)
     ax_w.plot(n, curve["half_width_percent"], label="predicted (widest condition)")
     pilot = curve["pilot"]
-    ax_w.plot(pilot["trials_per_point"], pilot["half_width_percent"], "o", label="pilot sessions")
+    ax_w.plot(pilot["trials_per_point"], pilot["half_width_percent"], "o",
+              label="pilot sessions (widest interval, mean)")  # fmt: skip
+    ax_w.plot(pilot["trials_per_point"], pilot["fitted_half_width_percent"], "x", color="C1",
+              label="the fit of the same intervals")  # fmt: skip
     ax_w.axhline(curve["target_percent"], color="C3", ls="--", label="target")
     ax_p.plot(n, np.asarray(curve["power"]) * 100)
     ax_p.axhline(curve["target_power"] * 100, color="C3", ls="--")
@@ -132,22 +138,36 @@ def group_figures(group: pd.DataFrame, pooled: pd.DataFrame, directory: Path) ->
     return written
 
 
-def _positions(values: list[Any]) -> tuple[list[float], list[str] | None]:
-    """Numbers are their own positions; anything else is placed 0, 1, 2... and labelled."""
+def _tick(value: Any) -> Any:
+    """A setting as the figures group it: a list or table (``timing_points_ms``) as its text."""
+    return str(value) if isinstance(value, list | tuple | dict) else value
+
+
+def _positions(values: list[Any]) -> tuple[dict[Any, float], list[str] | None]:
+    """Each value's place on the axis, and the tick labels: numbers are their own places;
+    anything else is placed 0, 1, 2... and labelled."""
     if all(isinstance(v, int | float) and not isinstance(v, bool) for v in values):
-        return [float(v) for v in values], None
-    return list(range(len(values))), [str(v) for v in values]
+        return {v: float(v) for v in values}, None
+    return {v: float(i) for i, v in enumerate(values)}, [str(v) for v in values]
 
 
 def _label(key: str) -> str:
-    """``params.geometry.misalignment_anterior_m`` -> ``misalignment anterior (m)``."""
-    leaf = key.rsplit(".", 1)[-1]
+    """The full key, its unit apart (two keys may share their last part).
+
+    >>> _label("params.geometry.misalignment_anterior_m")
+    'params.geometry.misalignment anterior (m)'
+    """
+    head, _, leaf = key.rpartition(".")
+    words = leaf.replace("_", " ")
     for suffix, unit in (("_m", "m"), ("_ms", "ms"), ("_hz", "Hz"), ("_rad", "rad"),
                          ("_rad_per_nm", "rad/(N·m)"), ("_s", "s")):  # fmt: skip
         if leaf.endswith(suffix) and not leaf.endswith("_per" + suffix):
-            return f"{leaf[: -len(suffix)].replace('_', ' ')} ({unit})"
-    return leaf.replace("_", " ")
+            words = f"{leaf[: -len(suffix)].replace('_', ' ')} ({unit})"
+            break
+    return f"{head}.{words}" if head else words
 
 
 def _slug(key: str) -> str:
-    return re.sub(r"[^A-Za-z0-9]+", "_", key.rsplit(".", 1)[-1]).strip("_")
+    """The full key as part of a file name (``analysis.window_ms`` and
+    ``params.walking.window_ms`` are two figures)."""
+    return re.sub(r"[^A-Za-z0-9._-]+", "_", key).strip("_.")

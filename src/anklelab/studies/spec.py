@@ -26,10 +26,14 @@ by a dotted key with one of three prefixes:
     "params.geometry.misalignment_anterior_m" = [0.0, 0.008, 0.016]
 
 A ``[sample]`` draws ``n`` points with its own ``seed``; each key gives ``{uniform = [lo, hi]}``,
-``{loguniform = [lo, hi]}``, ``{integers = [lo, hi]}`` (both ends included) or
+``{loguniform = [lo, hi]}``, ``{integers = [lo, hi]}`` (whole numbers, both ends included) or
 ``{choice = [...]}``. Every point (grid or sample) runs once per seed. The same seeds serve every
 point (common random numbers): two settings see the same gait, noise and trial order, so their
 difference is not masked by seed-to-seed scatter.
+
+Identical points are one point, computed once: a grid that lists a value twice (``100`` and
+``100.0`` are the same value), or a sample whose ``choice`` or ``integers`` draws repeat, has
+fewer points than values or draws.
 
 A cell is one (settings, seed): a pure description from which a worker simulates and analyses
 one session. Its key is a hash of its content (and of the anklelab version), so a resumed study
@@ -42,6 +46,7 @@ import hashlib
 import itertools
 import json
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Literal
@@ -52,9 +57,10 @@ from pydantic import Field, model_validator
 from anklelab._params import Parameters, did_you_mean, read_parameter_document
 from anklelab._session_limits import MAX_TRIALS_PER_POINT, MAX_UNPERTURBED
 from anklelab._version import __version__, code_fingerprint
-from anklelab.errors import ParameterError
+from anklelab.errors import AnklelabError, ParameterError
 
 __all__ = [
+    "MAX_SESSIONS",
     "PREFIXES",
     "Cell",
     "Study",
@@ -65,6 +71,9 @@ __all__ = [
 
 PREFIXES = ("twin", "params", "analysis")
 FORMAT = "anklelab-study/1"
+MAX_SESSIONS = 100_000
+"""Sessions (points x seeds) one study may hold: counted from the file, before any point is
+expanded. A study this size takes days on one machine; beyond it, split the study."""
 
 
 class TwinSettings(Parameters):
@@ -143,8 +152,7 @@ class Cell:
             "analysis": self.analysis,
             "base": self.base,
         }
-        text = json.dumps(content, sort_keys=True, default=_jsonable)
-        return hashlib.sha256(text.encode()).hexdigest()[:16]
+        return hashlib.sha256(_canonical_text(content).encode()).hexdigest()[:16]
 
 
 @dataclass(frozen=True)
@@ -163,6 +171,8 @@ class Study:
         ``{"n": ..., "seed": ..., key: distribution}`` (empty for a grid study).
     base : dict or None
         Parameter set from ``params_file`` (already validated).
+    params_file : dict or None
+        Where ``base`` was read: ``{"path": the file's absolute path, "sha256": its SHA-256}``.
     """
 
     name: str
@@ -171,6 +181,7 @@ class Study:
     grid: dict[str, list[Any]]
     sample: dict[str, Any]
     base: dict[str, Any] | None = None
+    params_file: dict[str, str] | None = None
 
     @property
     def varied(self) -> list[str]:
@@ -178,17 +189,24 @@ class Study:
         return list(self.grid) or [k for k in self.sample if k not in ("n", "seed")]
 
     def points(self) -> list[dict[str, Any]]:
-        """The grid's combinations or the sample's draws, each by full dotted key."""
+        """The grid's combinations or the sample's draws, each by full dotted key; a point equal
+        to an earlier one (``100`` and ``100.0`` are equal) is left out: it is the same
+        computation."""
         if self.grid:
-            keys = list(self.grid)
-            return [dict(zip(keys, v, strict=True)) for v in itertools.product(*self.grid.values())]
-        if not self.sample:
-            return [{}]
-        rng = np.random.default_rng(self.sample["seed"])
-        keys = self.varied
-        return [
-            {key: _draw(rng, self.sample[key]) for key in keys} for _ in range(self.sample["n"])
-        ]
+            keys, values = list(self.grid), self.grid.values()
+            drawn = [dict(zip(keys, v, strict=True)) for v in itertools.product(*values)]
+        elif self.sample:
+            rng = np.random.default_rng(self.sample["seed"])
+            drawn = [
+                {key: _draw(rng, self.sample[key]) for key in self.varied}
+                for _ in range(self.sample["n"])
+            ]
+        else:
+            drawn = [{}]
+        distinct: dict[str, dict[str, Any]] = {}
+        for point in drawn:
+            distinct.setdefault(_canonical_text(point), point)
+        return list(distinct.values())
 
     def cells(self) -> list[Cell]:
         """Every (point, seed), seeds innermost."""
@@ -211,7 +229,7 @@ class Study:
             "fixed": self.fixed,
             "grid": self.grid,
             "sample": self.sample,
-            "params_file": self.base is not None,
+            "params_file": self.params_file,
         }
 
 
@@ -237,6 +255,11 @@ def study_from_mapping(data: dict[str, Any], *, origin: str, root: Path | None =
         raise ParameterError(f"{origin}: format: expected {FORMAT!r}, got {data['format']!r}")
     if "grid" in data and "sample" in data:
         raise ParameterError(f"{origin}: give either [grid] or [sample], not both")
+    if not {"grid", "sample", "seeds"} & data.keys():
+        raise ParameterError(
+            f"{origin}: nothing to run: give a [grid] or a [sample] of settings to vary, or "
+            "seeds = N to repeat the fixed settings N times"
+        )
     name = data.get("name", Path(origin).stem)
     if not isinstance(name, str) or not name:
         raise ParameterError(f"{origin}: name: expected a non-empty string, got {name!r}")
@@ -251,20 +274,27 @@ def study_from_mapping(data: dict[str, Any], *, origin: str, root: Path | None =
         if not isinstance(data.get(table, {}), dict):
             raise ParameterError(f"{origin}: [{table}]: expected a table")
     grid = dict(data.get("grid", {}))
+    if "grid" in data and not grid:
+        raise ParameterError(
+            f"{origin}: [grid]: empty; give at least one KEY = [values] (or no [grid], to "
+            "repeat the fixed settings over the seeds)"
+        )
     for key, values in grid.items():
+        _check_nested("grid", key, values, origin)
         _check_key(key, origin, "grid")
         if not isinstance(values, list) or not values:
             raise ParameterError(f"{origin}: grid.{key}: expected a non-empty list of values")
     sample = dict(data.get("sample", {}))
-    if sample:
+    if "sample" in data:
         _check_sample(sample, origin)
     for key in fixed.keys() & {*grid, *sample}:
         table = "grid" if key in grid else "sample"
         raise ParameterError(
             f"{origin}: {key}: given as a fixed setting and in [{table}]; keep one"
         )
-    base = _base(data.get("params_file"), origin, root)
-    study = Study(name, seeds, fixed, grid, sample, base)
+    _check_size(origin, grid, sample, len(seeds))
+    base, params_file = _base(data.get("params_file"), origin, root)
+    study = Study(name, tuple(seeds), fixed, grid, sample, base, params_file)
     for key in {*fixed, *study.varied}:
         _check_key(key, origin, "grid" if key in grid else "setting")
     _validate_cells(study, origin)
@@ -296,18 +326,36 @@ def _flatten(table: dict[str, Any], prefix: str) -> dict[str, Any]:
     return out
 
 
-def _seeds(value: Any, origin: str) -> tuple[int, ...]:
+def _seeds(value: Any, origin: str) -> Sequence[int]:
+    """The seeds a study file gives (a count or a list), not yet expanded: a ``range``."""
     if isinstance(value, int) and not isinstance(value, bool) and value >= 1:
-        return tuple(range(value))
+        return range(value)
     if (
         isinstance(value, list)
         and value
         and all(isinstance(s, int) and not isinstance(s, bool) and s >= 0 for s in value)
         and len(set(value)) == len(value)
     ):
-        return tuple(value)
+        return value
     raise ParameterError(
         f"{origin}: seeds: expected a count >= 1 or a list of distinct seeds >= 0, got {value!r}"
+    )
+
+
+def _check_size(
+    origin: str, grid: dict[str, list[Any]], sample: dict[str, Any], seeds: int
+) -> None:
+    """At most :data:`MAX_SESSIONS` sessions, counted before anything is expanded."""
+    sizes = [len(values) for values in grid.values()] or [sample.get("n", 1)]
+    total = math.prod(sizes) * seeds
+    if total <= MAX_SESSIONS:
+        return
+    table = "grid" if grid else "sample" if sample else "seeds"
+    points = " × ".join(map(str, sizes))
+    plural = "" if sizes == [1] else "s"
+    raise ParameterError(
+        f"{origin}: {table}: {total} sessions ({points} point{plural} × {seeds} seeds); at most "
+        f"{MAX_SESSIONS} sessions in one study: split it into several studies"
     )
 
 
@@ -322,23 +370,52 @@ def _check_key(key: str, origin: str, where: str) -> None:
 _DISTRIBUTIONS = ("uniform", "loguniform", "integers", "choice")
 
 
+def _check_nested(table: str, key: str, value: Any, origin: str) -> None:
+    """A table where ``[grid]`` or ``[sample]`` expects a setting is TOML's reading of an unquoted
+    dotted key (``params.geometry.x = [...]`` is ``{"params": {"geometry": {"x": [...]}}}``), or
+    of a ``[grid.twin]`` table: the message names the key to quote."""
+    if "." in key or not isinstance(value, dict):
+        return
+    parts = [key]
+    while isinstance(value, dict) and value and not (table == "sample" and _is_draw(value)):
+        name, value = next(iter(value.items()))
+        parts.append(name)
+    example = "[...]" if table == "grid" else "{...}"
+    raise ParameterError(
+        f"{origin}: [{table}] {key}: a table, where a setting was expected: TOML reads an "
+        f'unquoted dotted key as nested tables; quote the key: "{".".join(parts)}" = {example}'
+    )
+
+
+def _is_draw(spec: Any) -> bool:
+    """Whether ``spec`` names one distribution of :data:`_DISTRIBUTIONS` (its arguments aside)."""
+    return isinstance(spec, dict) and len(spec) == 1 and next(iter(spec)) in _DISTRIBUTIONS
+
+
 def _check_sample(sample: dict[str, Any], origin: str) -> None:
     n, seed = sample.get("n"), sample.get("seed")
     if not isinstance(n, int) or isinstance(n, bool) or n < 1:
         raise ParameterError(f"{origin}: sample.n: expected a number of points >= 1, got {n!r}")
     if not isinstance(seed, int) or isinstance(seed, bool) or seed < 0:
         raise ParameterError(f"{origin}: sample.seed: expected an integer >= 0, got {seed!r}")
+    if not sample.keys() - {"n", "seed"}:
+        raise ParameterError(
+            f"{origin}: [sample]: no key to draw; give at least one KEY = {{uniform = [lo, hi]}}, "
+            "{loguniform = [lo, hi]}, {integers = [lo, hi]} or {choice = [...]}"
+        )
     for key, spec in sample.items():
         if key in ("n", "seed"):
             continue
+        _check_nested("sample", key, spec, origin)
         _check_key(key, origin, "sample")
-        ok = isinstance(spec, dict) and len(spec) == 1 and next(iter(spec)) in _DISTRIBUTIONS
+        ok = _is_draw(spec)
         kind, args = next(iter(spec.items())) if ok else (None, None)
         if ok and kind != "choice":
+            number = int if kind == "integers" else int | float
             ok = (
                 isinstance(args, list)
                 and len(args) == 2
-                and all(isinstance(a, int | float) and not isinstance(a, bool) for a in args)
+                and all(isinstance(a, number) and not isinstance(a, bool) for a in args)
                 and args[0] <= args[1]
                 and (kind != "loguniform" or args[0] > 0)
             )
@@ -347,8 +424,8 @@ def _check_sample(sample: dict[str, Any], origin: str) -> None:
         if not ok:
             raise ParameterError(
                 f"{origin}: sample.{key}: expected one of {{uniform = [lo, hi]}}, "
-                f"{{loguniform = [lo, hi]}} (lo > 0), {{integers = [lo, hi]}} or "
-                f"{{choice = [...]}}, got {spec!r}"
+                f"{{loguniform = [lo, hi]}} (lo > 0), {{integers = [lo, hi]}} (whole numbers) "
+                f"or {{choice = [...]}}, got {spec!r}"
             )
 
 
@@ -359,20 +436,29 @@ def _draw(rng: np.random.Generator, spec: dict[str, Any]) -> Any:
     if kind == "loguniform":
         return float(np.exp(rng.uniform(np.log(args[0]), np.log(args[1]))))
     if kind == "integers":
-        return int(rng.integers(int(args[0]), int(args[1]) + 1))
+        return int(rng.integers(args[0], args[1] + 1))
     value = args[int(rng.integers(len(args)))]
     return value
 
 
-def _base(path: Any, origin: str, root: Path | None) -> dict[str, Any] | None:
+def _base(
+    path: Any, origin: str, root: Path | None
+) -> tuple[dict[str, Any] | None, dict[str, str] | None]:
+    """The parameter set of ``params_file`` (relative to ``root``) and where it was read (its
+    absolute path and SHA-256); ``(None, None)`` without one."""
     if path is None:
-        return None
+        return None, None
     if not isinstance(path, str):
         raise ParameterError(f"{origin}: params_file: expected a path, got {path!r}")
+    from anklelab._runs import sha256_file
     from anklelab.platforms import load_platform
 
     full = (root or Path.cwd()) / path
-    return load_platform("perturberator", full).model_dump()
+    try:
+        base = load_platform("perturberator", full).model_dump()
+    except AnklelabError as exc:
+        raise ParameterError(f"{origin}: params_file = {path!r}: {exc}") from None
+    return base, {"path": str(full.resolve()), "sha256": sha256_file(full)}
 
 
 def _validate_cells(study: Study, origin: str) -> None:
@@ -448,7 +534,22 @@ def _analysis_misfit(params: Any, analysis: Any) -> str:
     return ""
 
 
-def _jsonable(value: Any) -> Any:
-    if isinstance(value, tuple):
-        return list(value)
-    raise TypeError(f"not JSON: {value!r}")
+def _canonical_text(content: Any) -> str:
+    """``content`` as JSON in one spelling per value: keys sorted, tuples as lists, a whole
+    float as the integer it equals (``100.0`` as ``100``: the same value of a number setting,
+    and an integer setting refuses ``100.0`` before any cell runs).
+
+    >>> _canonical_text({"b": (1.0, 2.5), "a": 100})
+    '{"a": 100, "b": [1, 2.5]}'
+    """
+    return json.dumps(_canonical(content), sort_keys=True)
+
+
+def _canonical(value: Any) -> Any:
+    if isinstance(value, float) and value.is_integer():
+        return int(value)
+    if isinstance(value, list | tuple):
+        return [_canonical(v) for v in value]
+    if isinstance(value, dict):
+        return {key: _canonical(v) for key, v in value.items()}
+    return value

@@ -72,14 +72,13 @@ def run_study(
     from anklelab.studies.cell import run_cell
 
     cells = study.cells()
-    results_store = ResultStore(out / "cells" if store is None else store)
-    unique = {cell.key: cell for cell in cells}
-    tasks = [Task(key, run_cell, (cell,)) for key, cell in unique.items()]
+    results_store = ResultStore(out / "cells" if store is None else store, fields=("rows",))
+    tasks = [Task(cell.key, run_cell, (cell,)) for cell in cells]  # distinct: Study.points
     run = run_tasks(
         tasks, results_store, scheduler=scheduler, workers=workers, retries=retries,
         progress=progress,
     )  # fmt: skip
-    results_store.copy_into(list(unique), out / "cells")
+    results_store.copy_into([cell.key for cell in cells], out / "cells")
     varied = study.varied
     records = [
         ({"cell": c.key, "cell_index": c.index, "seed": c.seed} | c.variables,
