@@ -65,7 +65,7 @@ def design(
             help="Trials per timing point of the pilot sessions, comma-separated.",
             metavar="N,N,...",
         ),
-    ] = "10,20,40",
+    ] = "20,40,80",
     seeds: Annotated[int, typer.Option(help="Pilot sessions per count.", min=1)] = 2,
     settings_file: SettingsOption = None,
     scheduler: SchedulerOption = None,

@@ -9,7 +9,10 @@ perturbed trials (random averages shrink as ``1 / sqrt(m)``). Each pilot interva
 ``c = half-width · sqrt(m)``; the condition's ``c`` is their median weighted by ``m``, so that
 the pilot's larger sessions, whose intervals are the better determined and the nearest to the
 answer, count the most, and one wide interval of a few trials does not set the curve. Intervals
-the analysis flags as poorly determined, and those of fewer than 3 trials, are left out.
+the analysis flags as poorly determined, and those of fewer than 3 trials, are left out. A small
+pilot pins ``c`` only to some ±15 %, and the trials needed go as ``c²``: the design takes ``c``'s
+one-sided 80 % upper confidence bound given how the condition's pilot intervals scatter
+(:func:`_c_bound`), or the median if that is larger.
 Each trial of a timing point is dorsiflexing or plantarflexing at random, so a condition gets a
 binomial share of the ``n`` trials per timing point; the design holds for the share a condition
 gets in 9 sessions of 10 (the binomial's 10th percentile ``m10(n)``, about
@@ -110,7 +113,7 @@ def design_trials(
     interval_percent: float = 3.0,
     change_percent: float = 10.0,
     power: float = 0.8,
-    pilot: Sequence[int] = (10, 20, 40),
+    pilot: Sequence[int] = (20, 40, 80),
     seeds: int = 2,
     analysis: dict[str, Any] | None = None,
     n_calibration: int | None = None,
@@ -248,17 +251,20 @@ def _answer(rows: Any, run: StudyRun, target: float, change: float, power: float
     conditions, curves = [], []
     for (direction, delay), group in usable.groupby(["direction", "delay_ms"], sort=True):
         m = group["n_perturbed"].to_numpy(float)
-        c = _weighted_median(group["half_width_percent"].to_numpy(float) * np.sqrt(m), m)
-        predicted = c / np.sqrt(share)
+        each = group["half_width_percent"].to_numpy(float) * np.sqrt(m)
+        c = _weighted_median(each, m)
+        bound = max(c, _c_bound(each, m))
+        predicted = bound / np.sqrt(share)
         if not predicted[-1] <= target:
             raise DesignError(
                 f"design: ±{target:g} % is out of reach at {direction}/{delay:g}: its interval, "
-                f"±{c:.1f} % / sqrt(trials of the condition), needs more than the twin's "
+                f"±{bound:.1f} % / sqrt(trials of the condition), needs more than the twin's "
                 f"{MAX_TRIALS_PER_POINT} trials per timing point; ask for a wider --interval"
             )
         conditions.append(
             {"direction": direction, "delay_ms": float(delay), "c_percent": c,
-             "intervals": len(group), "trials_needed": int(grid[np.argmax(predicted <= target)])}
+             "c_bound_percent": bound, "intervals": len(group),
+             "trials_needed": int(grid[np.argmax(predicted <= target)])}
         )  # fmt: skip
         curves.append(predicted)
     if not conditions:
@@ -339,6 +345,28 @@ def _pilot(rows: Any, usable: Any, fitted: dict[tuple[str, float], dict]) -> dic
         .tolist(),
         "sessions": pilot["seed"].nunique().tolist(),
     }
+
+
+def _c_bound(values: np.ndarray, weights: np.ndarray) -> float:
+    """A one-sided 80 % upper confidence bound of a condition's ``c`` from its pilot intervals'
+    ``values`` (%): their weighted mean on the log scale plus Student's ``t(0.8, K - 1)`` times
+    its standard error, ``K`` the effective number of intervals; the largest value for a single
+    interval, whose scatter nothing shows.
+
+    >>> round(_c_bound(np.array([10.0, 12.5, 8.0, 11.0]), np.ones(4)), 2)
+    11.23
+    >>> _c_bound(np.array([10.0]), np.ones(1))
+    10.0
+    """
+    from scipy.stats import t
+
+    effective = weights.sum() ** 2 / (weights**2).sum()
+    if effective < 2:
+        return float(values.max())
+    logs = np.log(values)
+    mean = np.average(logs, weights=weights)
+    variance = np.average((logs - mean) ** 2, weights=weights) * effective / (effective - 1)
+    return math.exp(mean + t.ppf(0.8, effective - 1) * math.sqrt(variance / effective))
 
 
 def _weighted_median(values: np.ndarray, weights: np.ndarray) -> float:
