@@ -17,6 +17,7 @@ from typer.testing import CliRunner
 from anklelab.cli import app
 from anklelab.commands.platform import platform_markdown
 from anklelab.platforms import PLATFORMS
+from tests.cli_in_process import run_anklelab
 
 ROOT = Path(__file__).resolve().parents[1]
 DOCS = ROOT / "docs"
@@ -81,18 +82,7 @@ def _write_example_files(text: str, root: Path) -> list[str]:
 
 def _anklelab(args: list[str], cwd: Path, monkeypatch, capsys) -> tuple[int, str, str]:
     """Run the ``anklelab`` entry point in-process in ``cwd``: (exit code, stdout, stderr)."""
-    from anklelab.cli import run
-
-    monkeypatch.chdir(cwd)
-    monkeypatch.setattr(sys, "argv", ["anklelab", *args])
-    capsys.readouterr()
-    try:
-        run()
-        code = 0
-    except SystemExit as exit:
-        code = exit.code if isinstance(exit.code, int) else 1
-    captured = capsys.readouterr()
-    return code, captured.out, captured.err
+    return run_anklelab(args, monkeypatch, capsys, cwd=cwd)
 
 
 def test_worked_example_session_imports_and_its_commands_run(tmp_path, monkeypatch, capsys):

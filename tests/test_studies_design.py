@@ -3,25 +3,10 @@ design leaves behind."""
 
 from __future__ import annotations
 
-import sys
 from pathlib import Path
 
 from anklelab.studies import checkpoint_for
-
-
-def _anklelab(args: list[str], monkeypatch, capsys) -> tuple[int, str, str]:
-    """Run the ``anklelab`` entry point in-process: (exit code, stdout, stderr)."""
-    from anklelab.cli import run
-
-    monkeypatch.setattr(sys, "argv", ["anklelab", *args])
-    capsys.readouterr()
-    try:
-        run()
-        code = 0
-    except SystemExit as exit:
-        code = exit.code if isinstance(exit.code, int) else 1
-    captured = capsys.readouterr()
-    return code, captured.out, captured.err
+from tests.cli_in_process import run_anklelab
 
 
 def test_a_pilot_count_beyond_the_twin_names_the_option_before_any_output(
@@ -30,7 +15,7 @@ def test_a_pilot_count_beyond_the_twin_names_the_option_before_any_output(
     """``--pilot 10,2000`` was refused by the pilot study's internal key, twin.trials_per_point,
     once the output was staged."""
     out = tmp_path / "design"
-    code, _, err = _anklelab(
+    code, _, err = run_anklelab(
         ["design", "--out", str(out), "--pilot", "10,2000"], monkeypatch, capsys
     )
     assert code == 2
@@ -49,7 +34,7 @@ def test_a_target_out_of_reach_leaves_no_scratch_directory(tmp_path: Path, monke
     out = tmp_path / "design"
     args = ["design", "--out", str(out), "--pilot", "3,4", "--seeds", "1", "--interval", "0.1",
             "--settings", str(settings), "--workers", "1"]  # fmt: skip
-    code, _, err = _anklelab(args, monkeypatch, capsys)
+    code, _, err = run_anklelab(args, monkeypatch, capsys)
     assert code == 2
     assert err.strip().splitlines()[-1].startswith("error: design: ±0.1 % is out of reach at ")
     assert sorted(p.name for p in tmp_path.iterdir()) == ["settings.toml"]
@@ -60,6 +45,6 @@ def test_workers_with_a_running_cluster_are_refused_before_any_output(
 ):
     out = tmp_path / "design"
     args = ["design", "--out", str(out), "--scheduler", "tcp://127.0.0.1:9", "--workers", "2"]
-    code, _, err = _anklelab(args, monkeypatch, capsys)
+    code, _, err = run_anklelab(args, monkeypatch, capsys)
     assert code == 2 and err.startswith("error: --workers: a running Dask cluster")
     assert list(tmp_path.iterdir()) == []
