@@ -353,6 +353,18 @@ def test_malformed_mapping_or_trial_list_is_named(twin, tmp_path, old, new, targ
         import_c3d(directory, mapping)
 
 
+def test_a_scale_that_converts_the_files_unit_is_not_refused(twin, tmp_path):
+    """`units` is the unit of stored x scale: a map that converts the file's degrees to
+    radians by its scale reads the same motor angle as one that names the degrees."""
+    _, root, _ = twin
+    radians = 'units = "rad"\nscale = 0.017453292519943295  # the file'
+    directory, mapping = _edit(tmp_path, root, 'units = "deg"           # the file', radians)
+    converted = import_c3d(directory, mapping)
+    as_named = import_c3d(root, MAP)
+    for a, b in zip(converted.walking, as_named.walking, strict=True):
+        np.testing.assert_allclose(a.recording["motor_angle"], b.recording["motor_angle"])
+
+
 def _with_changed_file(tmp_path, root, name, change):
     """A copy of the C3D directory (links) whose file ``name`` is changed by ``change`` (an
     ezc3d c3d object)."""

@@ -246,6 +246,21 @@ def test_repeated_calibration_file_names_are_refused(tmp_path, session):
         load_session(mutated(tmp_path, session, change))
 
 
+def test_forceplate_refuses_two_recordings_of_one_table_name(tmp_path, session):
+    """'t1' and 't1.csv' are two names, but one table ('.csv' is added): refused, not one table
+    silently written over the other."""
+    from anklelab.data.grf import write_grf_tables
+
+    def change(root):
+        root["walking"][0, 0]["file"] = "t1"
+        root["walking"][0, 1]["file"] = "t1.csv"
+
+    with pytest.raises(SessionFormatError, match=r"walking: two recordings would both be "
+                                                 r"written as 't1\.csv'"):  # fmt: skip
+        write_grf_tables(mutated(tmp_path, session, change), tmp_path / "grf")
+    assert not (tmp_path / "grf").exists()
+
+
 def test_missing_field_and_missing_variable(tmp_path, session):
     root = as_matlab(session)
     names = [n for n in root["walking"].dtype.names if n != "delay_ms"]

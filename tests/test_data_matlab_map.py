@@ -242,15 +242,18 @@ def test_malformed_maps_and_files_name_the_key_or_path(twin, tmp_path, old, new,
         import_matlab(path, _map(tmp_path, old, new))
 
 
-@pytest.mark.parametrize("constant", ["{ value = 0 }", "{ value = 0.0, scale = 2, units = 'kN' }"])
-def test_a_constant_column(tmp_path, constant):
+@pytest.mark.parametrize(
+    ("constant", "newtons"),
+    [("{ value = 0 }", 0.0), ("{ value = 1.5, scale = 2, units = 'kN' }", 3000.0)],
+)
+def test_a_constant_column(tmp_path, constant, newtons):
     """A column the file lacks, given as a constant `{ value = ... }` (lab-formats.md); the
     calibration group maps its own."""
     mapping = _map(tmp_path, 'grf_y_n = { field = "Fy" }', f"grf_y_n = {constant}")
     session = import_matlab(_tiny(tmp_path), mapping)
     for trial in session.walking:
         assert trial.recording["grf_y_n"].shape == (300,)
-        np.testing.assert_array_equal(trial.recording["grf_y_n"], 0.0)
+        np.testing.assert_array_equal(trial.recording["grf_y_n"], newtons)
 
 
 def _tiny_with(tmp_path, change):

@@ -204,3 +204,21 @@ def test_intervals_hold_the_truth_where_the_conditions_gains_truly_differ():
     rms = {mode: np.sqrt(np.mean(np.square(e))) for mode, e in errors.items()}
     assert rms["pooled"] < 0.9 * rms["measured"]
     assert np.mean(covered) >= 0.9
+
+
+@pytest.mark.parametrize("mode", ["measured", "pooled"])
+def test_a_condition_whose_plate_did_not_move_keeps_its_interval(mode):
+    """No plate rotation to measure the gain against (a NaN gain): the condition is left as
+    measured, and its intervals stay finite, pooled or not."""
+    from anklelab.pipelines.walking.impedance import estimate_timing_points
+    from anklelab.pipelines.walking.responses import RESPONSE
+
+    rng = np.random.default_rng(9)
+    responses = {f"dorsi/{t}": _condition(1000.0, 1.0, 0.05, 20, rng) for t in (100, 225, 350)}
+    responses["dorsi/350"].perturbed.data[:, RESPONSE.index("plate_angle")] = 0.0
+    settings = WalkingSettings(stiffness_model="linear", interval_reps=50, angle_gain=mode)
+    points = estimate_timing_points(responses, 20, settings, 0)
+    still = points[2]
+    assert np.isnan(still.angle_gain) and np.isnan(still.angle_gain_pooled)
+    for tp in points:
+        assert np.isfinite([*tp.stiffness.ci95, *tp.damping.ci95]).all()

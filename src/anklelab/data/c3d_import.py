@@ -370,11 +370,12 @@ def _analog(c3d: C3DFile, spec: AnalogMap | None, column: str, key: str) -> NDAr
 def _check_unit(c3d: C3DFile, spec: AnalogMap, column: str) -> None:
     """The mapping's unit must be the one a non-empty ``ANALOG:UNITS`` gives the channel (when
     it is a unit of :data:`~anklelab.data._units.UNITS`; a ``V`` channel is converted by
-    ``scale``)."""
+    ``scale``). Only where ``scale`` is 1 or -1: ``units`` is the unit of ``stored * scale``,
+    and a scale may convert units (0.001 from mm to m) or refer an angle through a gear."""
     stored = c3d.units[c3d.labels.index(spec.label)]
     found, quantity = read_unit(stored), column_quantity(column)
     mapped = spec.units or (si_unit(quantity) if quantity else None)
-    if found is None or quantity is None or found == (quantity, mapped):
+    if found is None or quantity is None or found == (quantity, mapped) or abs(spec.scale) != 1:
         return
     default = "" if spec.units else " (the default)"
     head = (
@@ -382,7 +383,10 @@ def _check_unit(c3d: C3DFile, spec: AnalogMap, column: str) -> None:
         f"{stored!r} (ANALOG:UNITS)"
     )
     if found[0] == quantity:
-        raise ParameterError(f'{head}; give units = "{found[1]}" if the file is right')
+        raise ParameterError(
+            f'{head}; give units = "{found[1]}" if the file is right (or the scale that '
+            "converts it)"
+        )
     raise ParameterError(f"{head}: a unit of {found[0]}, not of {quantity}; is the label right?")
 
 

@@ -77,6 +77,11 @@ def _session_tables(path: Path, min_force_n: float) -> dict[str, Table]:
             cop_z = np.where(np.isfinite(load_cop[0]), 0.0, np.nan)
             columns = (rec.time_s, load.grf_x, load.grf_y, load.grf_z, *load_cop, cop_z)
             name = rec.name if rec.name.endswith(".csv") else f"{rec.name}.csv"
+            if f"{section}/{name}" in tables:
+                raise SessionFormatError(
+                    f"{path}: {section}: two recordings would both be written as {name!r} "
+                    f"(one named {rec.name!r}); rename one"
+                )
             tables[f"{section}/{name}"] = dict(
                 zip(GRF_COLUMNS, (*columns, load.free_moment), strict=True)
             )

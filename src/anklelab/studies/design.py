@@ -77,8 +77,9 @@ class Design:
         against the truth (%) and the sessions.
     conditions : list of dict
         Per condition: ``direction``, ``delay_ms``, the fitted ``c_percent`` (%, the half-width
-        of one trial's interval), the ``intervals`` it was fitted to and the ``trials_needed``
-        per timing point.
+        of one trial's interval), its one-sided 80 % upper bound ``c_bound_percent`` (which the
+        curve uses), the ``intervals`` it was fitted to and the ``trials_needed`` per timing
+        point.
     interval_kind : str
         Which interval the analysis reported (``ci95`` or ``mean±1.96sd``).
     study : StudyRun
@@ -174,8 +175,10 @@ def design_trials(
     import json
 
     from anklelab._atomic import write_text_atomic
+    from anklelab._json import json_ready
 
-    write_text_atomic(out / "design.json", json.dumps(design.to_dict(), indent=2))
+    text = json.dumps(json_ready(design.to_dict()), indent=2, allow_nan=False)
+    write_text_atomic(out / "design.json", text)
     return design
 
 

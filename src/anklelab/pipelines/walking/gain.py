@@ -22,7 +22,8 @@ pooled. The angle's channels are scaled by ``g*_c / g_c``, each resample and sub
 own ``g_c`` and ``ḡ`` (the weights kept), so the intervals carry what is left of the noise.
 What the resamples cannot see is the part of a true difference between conditions that the
 pooling took away; with eight conditions ``τ`` is too uncertain to bound it, so the analysis
-counts the pooling's whole move of each estimate in its interval (:mod:`.impedance`).
+adds the pooling's whole move of each point's stiffness, damping and slope (and inertia, when
+each point has its own) to its interval's half-width (:mod:`.impedance`).
 """
 
 from __future__ import annotations

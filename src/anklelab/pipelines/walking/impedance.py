@@ -487,12 +487,12 @@ def _timing_point(
         variant_fits = _fit(condition.variants, None, name, fs, at_variants)
         systematic |= _systematic(variant_fits, condition.timing, centre, windows_fit)
     # the pooled angle gain's move (:mod:`.gain`), in full: the data cannot tell how much of it
-    # was noise and how much a true difference between the conditions
-    moved = abs(1.0 - condition.gain[1] / condition.gain[0])
-    pooling = {
-        q: moved * abs(float(getattr(fitted[source[q]], q)[0][_FULL]))
-        for q in ("stiffness", "damping")
-    }
+    # was noise and how much a true difference between the conditions; the session's inertia
+    # pools every condition's angle, so its own spread carries theirs
+    measured, pooled = condition.gain
+    moved = abs(1.0 - pooled / measured) if np.isfinite(measured) and pooled != measured else 0.0
+    scaled = ("stiffness", "damping") if shared is not None else _SYSTEMATIC
+    pooling = {q: moved * abs(float(getattr(fitted[source[q]], q)[0][_FULL])) for q in scaled}
     scales = {q: scale for q in source}
     if shared is not None:  # the session's trials behind it
         scales["inertia"] = shared.scale
@@ -529,7 +529,14 @@ def _timing_point(
         stiffness_change_probability=probability,
         stiffness_change_verdict=verdict,
         stiffness_slope=(
-            _estimate(linear.stiffness_slope[0], reps, paper, scale, bias_unknown=bias_unknown)
+            _estimate(
+                linear.stiffness_slope[0],
+                reps,
+                paper,
+                scale,
+                bias_unknown=bias_unknown,
+                moved=moved * abs(float(linear.stiffness_slope[0][_FULL])),
+            )
             if model == "linear"
             else None
         ),

@@ -16,6 +16,7 @@ from typing import TYPE_CHECKING, Any, NamedTuple
 import numpy as np
 from numpy.typing import NDArray
 
+from anklelab._json import json_ready
 from anklelab._version import __version__
 from anklelab.errors import ResultsFormatError
 from anklelab.ident.bench import BenchStiffness, extrapolated, interpolate_stiffness
@@ -381,7 +382,7 @@ class WalkingResults:
         subject : str
             The session's subject (``session.toml``'s ``subject``), recorded when not empty.
         """
-        return _finite(
+        return json_ready(
             {
                 "anklelab_version": __version__,
                 "session": session,
@@ -458,19 +459,6 @@ class WalkingResults:
             row["bench_stiffness_nm_per_rad"] = match and match["bench_stiffness_nm_per_rad"]
             row["error_percent"] = match and match["error_percent"]
             row["bench_extrapolated"] = match and int(match["bench_extrapolated"])
-            rows.append(_finite(row))
+            rows.append(json_ready(row))
         columns = dict.fromkeys(key for row in rows for key in row)  # the slope is per point
         return [{key: row.get(key) for key in columns} for row in rows]
-
-
-def _finite(node: Any) -> Any:
-    """JSON has no NaN: non-finite floats become ``None``."""
-    if isinstance(node, dict):
-        return {key: _finite(value) for key, value in node.items()}
-    if isinstance(node, list | tuple):
-        return [_finite(value) for value in node]
-    if isinstance(node, float | np.floating) and not np.isfinite(node):
-        return None
-    if isinstance(node, np.floating):
-        return float(node)
-    return node
