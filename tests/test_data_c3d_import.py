@@ -165,6 +165,16 @@ def _events_map(tmp_path, extra=""):
     return tmp_path / "map.toml"
 
 
+def test_a_misspelt_key_of_the_events_trial_list_gets_a_hint_at_its_place(tmp_path):
+    """pydantic places the [trials] table's keys under its `source` tag (trials.events....):
+    the message names the key as the file has it, with the hint."""
+
+    mapping = _events_map(tmp_path, '\ncalibrationn = ["cal_*.c3d"]')
+    with pytest.raises(ParameterError, match=r"trials\.calibrationn: unknown key \(did you mean "
+                                             r"'calibration'\?\)"):  # fmt: skip
+        import_c3d(tmp_path, mapping)
+
+
 def _events_export(session, root, **options):
     small = type(session)(session.info, session.calibration, session.walking[:12], (), None, {})
     export_session(small, root, events=True, **options)
@@ -290,7 +300,8 @@ def _edit(tmp_path, root, old, new, target="map"):
             "map",
             ParameterError,
             r"^\S+map\.toml: channels\.motor_angle\.units: 'rad', but \S+cal_01\.c3d gives "
-            r"'Motor' in 'deg' \(ANALOG:UNITS\); give units = \"deg\" if the file is right$",
+            r"'Motor' in 'deg' \(ANALOG:UNITS\); give units = \"deg\" if the file is right \(or "
+            r"the scale that converts it\)$",
         ),
         (
             'label = "Gonio"\nunits = "deg"\n',

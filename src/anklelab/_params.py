@@ -208,31 +208,54 @@ def _without_none(annotation: Any) -> Any:
     return members[0] if union and len(members) == 1 else annotation
 
 
-def _model_at(model: type[BaseModel], loc: tuple[Any, ...]) -> type[BaseModel] | None:
+def _tagged(annotation: Any, tag: Any) -> type[BaseModel] | None:
+    """The member of a union of models whose ``Literal`` field takes the value ``tag`` (the
+    discriminator pydantic puts in an error's location), or ``None``."""
+    for member in typing.get_args(annotation):
+        found = _model_in(member)
+        for field in found.model_fields.values() if found is not None else ():
+            if typing.get_origin(field.annotation) is typing.Literal and tag in typing.get_args(
+                field.annotation
+            ):
+                return found
+    return None
+
+
+def _model_at(
+    model: type[BaseModel], loc: tuple[Any, ...]
+) -> tuple[type[BaseModel] | None, tuple[Any, ...]]:
     """The model at ``loc`` (``("walking", 0)`` is an element of the tuple ``walking``), or
-    ``None`` where the location is not in a model."""
+    ``None`` where the location is not in a model; and ``loc`` without the discriminators of
+    unions of models (``trials.events.ignore`` is ``[trials] ignore`` in the file)."""
     annotation: Any = model
-    for key in loc:
+    shown = []
+    for i, key in enumerate(loc):
         annotation = _without_none(annotation)
         origin = typing.get_origin(annotation)
         if origin in (tuple, list, dict):  # the key is an index or a mapping key
             annotation = typing.get_args(annotation)[1 if origin is dict else 0]
+            shown.append(key)
             continue
+        if (member := _tagged(annotation, key)) is not None:
+            annotation = member
+            continue
+        shown.append(key)
         current = _model_in(annotation)
         field = current.model_fields.get(str(key)) if current is not None else None
         if field is None:
-            return None
+            return None, (*shown, *loc[i + 1 :])
         annotation = field.annotation
-    return _model_in(annotation)
+    return _model_in(annotation), tuple(shown)
 
 
 def _describe(error: Mapping[str, Any], model: type[BaseModel]) -> str:
     loc = tuple(error["loc"])
-    key = ".".join(str(part) for part in loc)
+    _, shown = _model_at(model, loc)
+    key = ".".join(str(part) for part in shown)
     if error["type"] == "missing":
         return f"{key}: required key is missing"
     if error["type"] == "extra_forbidden":
-        parent = _model_at(model, loc[:-1])
+        parent, _ = _model_at(model, loc[:-1])
         hint = did_you_mean(str(loc[-1]), parent.model_fields) if parent is not None else ""
         return f"{key}: unknown key{hint}"
     if error["type"] == "value_error":  # a model validator's own message names its keys
