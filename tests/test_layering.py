@@ -28,6 +28,7 @@ RANK = {
     "metrics": 0,
     "_student_t": 0,  # Student's t without SciPy: the analysis's intervals
     "_session_limits": 0,  # the largest twin session simulated on request
+    "_json": 0,  # results as JSON (no NaN): the analysis and the studies write it
     "iir": 0,  # filter designs and the zero-phase filter: the twin and the analysis share them
     "platforms": 1,
     "sim": 2,
