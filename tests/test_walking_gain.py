@@ -222,3 +222,29 @@ def test_a_condition_whose_plate_did_not_move_keeps_its_interval(mode):
     assert np.isnan(still.angle_gain) and np.isnan(still.angle_gain_pooled)
     for tp in points:
         assert np.isfinite([*tp.stiffness.ci95, *tp.damping.ci95]).all()
+
+
+def test_analyze_prints_the_gains_by_condition():
+    """The command's summary gives the ankle angle's gains against the plate, measured and as
+    used; nothing where none was measured (a file written before the gains existed)."""
+    from anklelab.commands.analyze import _angle_gains
+    from anklelab.pipelines import WalkingResults
+    from anklelab.pipelines.walking.results import Estimate, TimingPoint
+
+    e = Estimate(1000.0, 1.0, (990.0, 1010.0))
+    points = [
+        TimingPoint(d, "dorsi", 20, 80, 0.06, e, e, e, e, "linear", e, False, angle_gain=g,
+                    angle_gain_pooled=h)
+        for d, g, h in ((100.0, 0.98, 1.001), (225.0, 1.03, 1.004))
+    ]  # fmt: skip
+    pooled = WalkingResults(WalkingSettings(), {}, points, [])
+    assert _angle_gains(pooled) == (
+        "ankle angle / plate rotation: 0.980 to 1.030 by condition, pooled to 1.001 to 1.004 "
+        "(angle_gain in results.json)"
+    )
+    measured = WalkingResults(WalkingSettings(angle_gain="measured"), {}, points, [])
+    assert _angle_gains(measured).endswith(
+        "0.980 to 1.030 by condition (angle_gain in results.json)"
+    )
+    old = [dataclasses.replace(tp, angle_gain=np.nan, angle_gain_pooled=np.nan) for tp in points]
+    assert _angle_gains(WalkingResults(WalkingSettings(), {}, old, [])) == ""

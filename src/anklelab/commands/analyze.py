@@ -118,6 +118,19 @@ def _poorly_determined(results: WalkingResults) -> str:
     return ", ".join(f"{name} at {k} of {n} points" for name, k in counts.items() if k)
 
 
+def _angle_gains(results: WalkingResults) -> str:
+    """The ankle angle's gains against the plate's rotation across the conditions, measured and
+    as the estimates use them ("" where none was measured)."""
+    measured = [tp.angle_gain for tp in results.timing_points if math.isfinite(tp.angle_gain)]
+    if not measured:
+        return ""
+    used = [tp.angle_gain_pooled for tp in results.timing_points if math.isfinite(tp.angle_gain)]
+    line = f"ankle angle / plate rotation: {min(measured):.3f} to {max(measured):.3f} by condition"
+    if results.settings.angle_gain == "pooled":
+        line += f", pooled to {min(used):.3f} to {max(used):.3f}"
+    return line + " (angle_gain in results.json)"
+
+
 def _renderer(figures: bool) -> FigureRenderer | contextlib.nullcontext[None]:
     """Figure workers, started now so that they import matplotlib while the analysis runs."""
     if not figures:
@@ -225,6 +238,8 @@ def analyze(
         f"{f' ({reasons})' if reasons else ''} (see trials.csv); results in {out}",
         markup=False,
     )
+    if gains := _angle_gains(results):
+        console.print(gains, markup=False, soft_wrap=True)
     vague = _poorly_determined(results)
     if vague:
         line = f"≈ poorly determined: {vague} (intervals in results.json)"
